@@ -1,0 +1,3 @@
+//! dmbn: multimodal action prediction with Conditional Neural Processes.
+pub mod data;
+pub mod sim;
