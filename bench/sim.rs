@@ -56,8 +56,13 @@ fn main() {
     if std::env::args().any(|a| a == "--test" || a == "--list") {
         return;
     }
-    println!("simulator benchmark: median of {REPEATS} runs, grasp+move seeds 0..{SEEDS}, one thread");
-    println!("{:>6} {:>18} {:>14} {:>14}", "size", "sim+render fps", "physics fps", "render fps");
+    println!(
+        "simulator benchmark: median of {REPEATS} runs, grasp+move seeds 0..{SEEDS}, one thread"
+    );
+    println!(
+        "{:>6} {:>18} {:>14} {:>14}",
+        "size", "sim+render fps", "physics fps", "render fps"
+    );
     let mut json = Vec::new();
     for size in [64u32, 128] {
         let both = frames_per_second(size, true, true);

@@ -5,7 +5,10 @@ use image::{imageops, RgbImage};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
-    let out = args.get(1).map(String::as_str).unwrap_or("docs/episodes.png");
+    let out = args
+        .get(1)
+        .map(String::as_str)
+        .unwrap_or("docs/episodes.png");
     let seed: u64 = args.get(2).map(|s| s.parse()).transpose()?.unwrap_or(3);
     let size: u32 = args.get(3).map(|s| s.parse()).transpose()?.unwrap_or(128);
     let columns = 8;
@@ -14,8 +17,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let seq = episode(action, seed, size)?;
         for c in 0..columns {
             let k = (c as usize * (seq.len() - 1)) / (columns as usize - 1);
-            let frame = RgbImage::from_raw(size, size, seq.frame(k).to_vec()).ok_or("frame size")?;
-            imageops::replace(&mut strip, &frame, (c * size) as i64, (row as u32 * size) as i64);
+            let frame =
+                RgbImage::from_raw(size, size, seq.frame(k).to_vec()).ok_or("frame size")?;
+            imageops::replace(
+                &mut strip,
+                &frame,
+                (c * size) as i64,
+                (row as u32 * size) as i64,
+            );
         }
         println!("{action}: {} steps, digest {}", seq.len(), seq.digest());
     }

@@ -18,7 +18,11 @@ fn same_seed_same_episode_and_placement_is_reproducible() {
         assert_eq!(a, b);
         let [x, y, _] = a.object[0];
         let c = Simulator::with_object(action, x, y, 11, 64).unwrap().run();
-        assert_eq!(a.digest(), c.digest(), "with_object at new()'s placement must match");
+        assert_eq!(
+            a.digest(),
+            c.digest(),
+            "with_object at new()'s placement must match"
+        );
         let d = episode(action, 12, 64).unwrap();
         assert_ne!(a.digest(), d.digest(), "another seed gives another episode");
     }
@@ -39,20 +43,33 @@ fn grasp_lifts_the_object_and_move_pushes_it() {
     for seed in 0..6 {
         let g = episode(Action::Grasp, seed, 64).unwrap();
         let (first, last) = (g.object[0], *g.object.last().unwrap());
-        assert!(last[2] > 0.15, "grasp seed {seed}: object ends at z = {}", last[2]);
+        assert!(
+            last[2] > 0.15,
+            "grasp seed {seed}: object ends at z = {}",
+            last[2]
+        );
         assert_eq!(g.joints[0][6], 0.0, "gripper starts open");
         assert!(g.joints.last().unwrap()[6] < -0.005, "gripper ends closed");
         // The object rises with the grasp point (held, not teleported).
         let tcp = g.endpoint.last().unwrap();
-        assert!((tcp[2] - last[2]).abs() < 0.03, "object follows the fingers");
+        assert!(
+            (tcp[2] - last[2]).abs() < 0.03,
+            "object follows the fingers"
+        );
         assert!((first[2] - OBJECT_HALF_HEIGHT).abs() < 1e-3);
 
         let m = episode(Action::Move, seed, 64).unwrap();
         let (first, last) = (m.object[0], *m.object.last().unwrap());
         let moved = ((last[0] - first[0]).powi(2) + (last[1] - first[1]).powi(2)).sqrt();
         assert!(moved > 0.05, "move seed {seed}: object moved {moved} m");
-        assert!((last[2] - OBJECT_HALF_HEIGHT).abs() < 0.01, "object stays upright on the table");
-        assert!(m.joints.iter().all(|j| j[6].abs() < 0.02), "move keeps the gripper open");
+        assert!(
+            (last[2] - OBJECT_HALF_HEIGHT).abs() < 0.01,
+            "object stays upright on the table"
+        );
+        assert!(
+            m.joints.iter().all(|j| j[6].abs() < 0.02),
+            "move keeps the gripper open"
+        );
     }
 }
 
@@ -63,7 +80,9 @@ fn joints_and_endpoint_are_finite_and_in_range() {
         assert!(row.iter().all(|v| v.is_finite()));
     }
     for row in &seq.joints {
-        assert!(row[..6].iter().all(|a| a.abs() <= 2.0 * std::f32::consts::PI));
+        assert!(row[..6]
+            .iter()
+            .all(|a| a.abs() <= 2.0 * std::f32::consts::PI));
     }
 }
 
@@ -82,27 +101,44 @@ fn frames_show_the_scene() {
         let all = |k: usize, pred: &dyn Fn([u8; 3]) -> bool| {
             (0..size * size).any(|i| pred(px(k, i % size, i / size)))
         };
-        assert!(centre_low.iter().all(|&c| c > 10), "table or arm in the lower middle");
-        assert!(all(0, &|[r, g, b]| b > 150 && r < 150), "blue joint caps");
-        assert!(all(0, &|[r, g, b]| r > 150 && g > 150 && b > 150), "light arm links");
+        assert!(
+            centre_low.iter().all(|&c| c > 10),
+            "table or arm in the lower middle"
+        );
+        assert!(all(0, &|[r, _, b]| b > 150 && r < 150), "blue joint caps");
+        assert!(
+            all(0, &|[r, g, b]| r > 150 && g > 150 && b > 150),
+            "light arm links"
+        );
         assert!(
             all(0, &|[r, g, b]| r == g && g == b && (30..60).contains(&r)),
             "dark table"
         );
         let last = seq.len() - 1;
-        assert!(all(last, &|[r, g, b]| r > 150 && g > 130 && b < 60), "yellow object");
+        assert!(
+            all(last, &|[r, g, b]| r > 150 && g > 130 && b < 60),
+            "yellow object"
+        );
     }
 }
 
 #[test]
 fn bad_settings_are_errors() {
-    assert_eq!(Simulator::new(Action::Grasp, 0, 100).err(), Some(SimError::ImageSize(100)));
-    let err = Simulator::with_object(Action::Move, 0.5, 0.5, 0, 64).err().unwrap();
+    assert_eq!(
+        Simulator::new(Action::Grasp, 0, 100).err(),
+        Some(SimError::ImageSize(100))
+    );
+    let err = Simulator::with_object(Action::Move, 0.5, 0.5, 0, 64)
+        .err()
+        .unwrap();
     assert!(matches!(err, SimError::ObjectOutOfRegion { .. }));
     assert!(err.to_string().contains("outside the placement region"));
     assert!(Simulator::with_object(Action::Move, f32::NAN, 0.5, 0, 64).is_err());
     let err = "jump".parse::<Action>().unwrap_err();
-    assert_eq!(err.to_string(), "unknown action \"jump\": expected \"grasp\" or \"move\"");
+    assert_eq!(
+        err.to_string(),
+        "unknown action \"jump\": expected \"grasp\" or \"move\""
+    );
 }
 
 #[test]

@@ -1,4 +1,34 @@
-//! Sequences and datasets in the original DMBN folder layout.
+//! Sequences and datasets in the original DMBN folder layout:
+//!
+//! ```text
+//! <root>/<id>/<action>/<k>.png (or .jpeg)   frames 0..T-1, extra frames ignored
+//! <root>/<id>/<action>/joint_<id>.txt       T rows x 7: 6 joint angles, gripper
+//! <root>/<id>/<action>/object_<id>.txt      T rows x 3: object xyz
+//! <root>/<id>/<action>/endpoint_<id>.txt    T rows x 7: end effector xyz, orientation, gripper
+//! ```
+//!
+//! Reading validates everything (column counts, numbers, row counts, frame count and size)
+//! and reports the offending file; writing is atomic per file, and [`DatasetWriter`] builds a
+//! whole dataset in a temporary folder renamed into place at the end. Action folders are plain
+//! names here (`"grasp"`, `"move"`) so this module does not depend on the simulator.
+mod action_summary;
+mod dataset;
+mod dataset_writer;
+mod error;
+mod layout;
+mod reader;
 mod sequence;
+mod sequence_ref;
+mod summary;
+mod writer;
 
+pub use action_summary::ActionSummary;
+pub use dataset::Dataset;
+pub use dataset_writer::DatasetWriter;
+pub use error::DataError;
+pub use layout::{endpoint_path, joint_path, object_path, sequence_dir, MAX_IMAGE_SIZE};
+pub use reader::read_sequence;
 pub use sequence::{Sequence, ENDPOINT, JOINTS};
+pub use sequence_ref::SequenceRef;
+pub use summary::Summary;
+pub use writer::{write_atomic, write_sequence};

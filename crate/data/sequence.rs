@@ -48,7 +48,13 @@ impl Sequence {
     pub fn times(&self) -> Vec<f32> {
         let t = self.len();
         (0..t)
-            .map(|k| if t > 1 { k as f32 / (t - 1) as f32 } else { 0.0 })
+            .map(|k| {
+                if t > 1 {
+                    k as f32 / (t - 1) as f32
+                } else {
+                    0.0
+                }
+            })
             .collect()
     }
 

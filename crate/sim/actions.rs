@@ -9,7 +9,8 @@ use super::Action;
 
 /// Joint angles near the home pose (gripper above the table centre, pointing down): the
 /// starting guess that puts IK on the elbow-up, wrist-down branch.
-pub const HOME_GUESS: [f32; ARM_JOINTS] = [0.0, -1.2, 1.5, -1.87, -1.5708, 0.0];
+pub const HOME_GUESS: [f32; ARM_JOINTS] =
+    [0.0, -1.2, 1.5, -1.87, -core::f32::consts::FRAC_PI_2, 0.0];
 /// Where every episode starts: above the middle of the placement region.
 pub const HOME: [f32; 3] = [0.0, 0.52, 0.40];
 
@@ -36,7 +37,10 @@ impl Plan {
     /// segment durations and the free parameters (lift offset, push direction and distance).
     pub fn new(action: Action, object: [f32; 2], rng: &mut Pcg64) -> Plan {
         let [ox, oy] = object;
-        let home = GripperPose { position: Vector::from(HOME), yaw: 0.0 };
+        let home = GripperPose {
+            position: Vector::from(HOME),
+            yaw: 0.0,
+        };
         let segments = match action {
             Action::Grasp => {
                 let yaw = rng.random_range(-0.4f32..0.4);
@@ -48,10 +52,38 @@ impl Plan {
                     0.28,
                 );
                 vec![
-                    Segment { to: GripperPose { position: above, yaw }, steps: rng.random_range(14..=30), closure: 0.0 },
-                    Segment { to: GripperPose { position: grasp, yaw }, steps: rng.random_range(8..=16), closure: 0.0 },
-                    Segment { to: GripperPose { position: grasp, yaw }, steps: rng.random_range(6..=12), closure: 1.0 },
-                    Segment { to: GripperPose { position: lift, yaw }, steps: rng.random_range(8..=24), closure: 1.0 },
+                    Segment {
+                        to: GripperPose {
+                            position: above,
+                            yaw,
+                        },
+                        steps: rng.random_range(14..=30),
+                        closure: 0.0,
+                    },
+                    Segment {
+                        to: GripperPose {
+                            position: grasp,
+                            yaw,
+                        },
+                        steps: rng.random_range(8..=16),
+                        closure: 0.0,
+                    },
+                    Segment {
+                        to: GripperPose {
+                            position: grasp,
+                            yaw,
+                        },
+                        steps: rng.random_range(6..=12),
+                        closure: 1.0,
+                    },
+                    Segment {
+                        to: GripperPose {
+                            position: lift,
+                            yaw,
+                        },
+                        steps: rng.random_range(8..=24),
+                        closure: 1.0,
+                    },
                 ]
             }
             Action::Move => {
@@ -72,10 +104,38 @@ impl Plan {
                 // Back off while rising, so the leading finger does not drag the object up.
                 let end_high = end_low - dir * 0.05 + Vector::new(0.0, 0.0, 0.16);
                 vec![
-                    Segment { to: GripperPose { position: start_high, yaw }, steps: rng.random_range(14..=28), closure: 0.0 },
-                    Segment { to: GripperPose { position: start_low, yaw }, steps: rng.random_range(8..=14), closure: 0.0 },
-                    Segment { to: GripperPose { position: end_low, yaw }, steps: rng.random_range(24..=48), closure: 0.0 },
-                    Segment { to: GripperPose { position: end_high, yaw }, steps: rng.random_range(6..=20), closure: 0.0 },
+                    Segment {
+                        to: GripperPose {
+                            position: start_high,
+                            yaw,
+                        },
+                        steps: rng.random_range(14..=28),
+                        closure: 0.0,
+                    },
+                    Segment {
+                        to: GripperPose {
+                            position: start_low,
+                            yaw,
+                        },
+                        steps: rng.random_range(8..=14),
+                        closure: 0.0,
+                    },
+                    Segment {
+                        to: GripperPose {
+                            position: end_low,
+                            yaw,
+                        },
+                        steps: rng.random_range(24..=48),
+                        closure: 0.0,
+                    },
+                    Segment {
+                        to: GripperPose {
+                            position: end_high,
+                            yaw,
+                        },
+                        steps: rng.random_range(6..=20),
+                        closure: 0.0,
+                    },
                 ]
             }
         };
@@ -87,11 +147,19 @@ impl Plan {
         self.joints.len()
     }
 
+    /// True for a plan without steps (never produced by [`Plan::new`]).
+    pub fn is_empty(&self) -> bool {
+        self.joints.is_empty()
+    }
+
     /// Interpolate the grasp point in Cartesian space and solve IK at every step.
     fn from_segments(start: GripperPose, segments: &[Segment]) -> Plan {
         let ik = Ik::default();
         let (mut q, _) = ik.solve(&start, HOME_GUESS);
-        let mut plan = Plan { joints: vec![q], closure: vec![0.0] };
+        let mut plan = Plan {
+            joints: vec![q],
+            closure: vec![0.0],
+        };
         let (mut from, mut closure) = (start, 0.0f32);
         for seg in segments {
             for k in 1..=seg.steps {

@@ -14,9 +14,9 @@ const D6: f32 = 0.0823;
 /// Distance from the flange to the grasp point (between the fingertips), along the tool axis.
 pub const GRASP_DEPTH: f32 = 0.105;
 /// Finger half-gap when the gripper is open.
-pub const FINGER_OPEN: f32 = 0.06;
+pub const FINGER_OPEN: f32 = 0.085;
 /// How far each finger may travel towards the centre.
-pub const FINGER_TRAVEL: f32 = 0.055;
+pub const FINGER_TRAVEL: f32 = 0.08;
 
 /// The UR-like arm's kinematic chain in its zero configuration, in the arm-base frame
 /// (z up, y forward from the base towards the table centre, x to the right seen from the camera).
@@ -73,7 +73,7 @@ impl Arm {
                 Self::anchor(i),
                 Rotation::from_axis_angle(v(Self::JOINT_AXES[i]), q[i]),
             );
-            parent = parent * local;
+            parent *= local;
             poses[i] = parent;
         }
         poses

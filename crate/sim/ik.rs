@@ -43,14 +43,22 @@ pub struct Ik {
 
 impl Default for Ik {
     fn default() -> Self {
-        Ik { damping: 0.05, iterations: 60, tolerance: 1e-5 }
+        Ik {
+            damping: 0.05,
+            iterations: 60,
+            tolerance: 1e-5,
+        }
     }
 }
 
 impl Ik {
     /// Joint angles reaching `target`, starting from `q`. Returns the angles and the final
     /// error norm (metres + radians), which is small when the target is reachable.
-    pub fn solve(&self, target: &GripperPose, mut q: [f32; ARM_JOINTS]) -> ([f32; ARM_JOINTS], f32) {
+    pub fn solve(
+        &self,
+        target: &GripperPose,
+        mut q: [f32; ARM_JOINTS],
+    ) -> ([f32; ARM_JOINTS], f32) {
         let goal_rot = target.rotation();
         let mut err = f32::INFINITY;
         for _ in 0..self.iterations {
@@ -88,9 +96,9 @@ fn jacobian(q: &[f32; ARM_JOINTS]) -> Matrix6<f32> {
     let poses = Arm::link_poses(q);
     let (p, _) = Arm::grasp_frame(q);
     let mut j = Matrix6::zeros();
-    for i in 0..ARM_JOINTS {
-        let a = poses[i].rotation * v(Arm::JOINT_AXES[i]);
-        let lin = a.cross(p - poses[i].translation);
+    for (i, pose) in poses.iter().enumerate() {
+        let a = pose.rotation * v(Arm::JOINT_AXES[i]);
+        let lin = a.cross(p - pose.translation);
         j.set_column(i, &Vector6::new(lin.x, lin.y, lin.z, a.x, a.y, a.z));
     }
     j
@@ -104,8 +112,16 @@ mod tests {
     fn reaches_points_over_the_table() {
         let ik = Ik::default();
         let mut q = super::super::actions::HOME_GUESS;
-        for (x, y, z) in [(0.0, 0.55, 0.4), (0.15, 0.45, 0.05), (-0.15, 0.65, 0.05), (0.0, 0.6, 0.3)] {
-            let target = GripperPose { position: Vector::new(x, y, z), yaw: 0.0 };
+        for (x, y, z) in [
+            (0.0, 0.55, 0.4),
+            (0.15, 0.45, 0.05),
+            (-0.15, 0.65, 0.05),
+            (0.0, 0.6, 0.3),
+        ] {
+            let target = GripperPose {
+                position: Vector::new(x, y, z),
+                yaw: 0.0,
+            };
             let (sol, err) = ik.solve(&target, q);
             assert!(err < 1e-3, "target ({x}, {y}, {z}): error {err}");
             let (p, _) = Arm::grasp_frame(&sol);

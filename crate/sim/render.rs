@@ -8,27 +8,43 @@ pub enum Shape {
     /// Cylinder with hemispherical ends between two points.
     Capsule { a: Vector, b: Vector, radius: f32 },
     /// Box with a centre, orientation and half extents.
-    Cuboid { center: Vector, rotation: Rotation, half: Vector },
+    Cuboid {
+        center: Vector,
+        rotation: Rotation,
+        half: Vector,
+    },
 }
 
 impl Shape {
     /// The same shape moved by `pose` (shapes are described in their body's frame).
     pub fn transformed(&self, pose: &Pose) -> Shape {
         match *self {
-            Shape::Cylinder { a, b, radius } => Shape::Cylinder { a: pose * a, b: pose * b, radius },
-            Shape::Capsule { a, b, radius } => Shape::Capsule { a: pose * a, b: pose * b, radius },
-            Shape::Cuboid { center, rotation, half } => {
-                Shape::Cuboid { center: pose * center, rotation: pose.rotation * rotation, half }
-            }
+            Shape::Cylinder { a, b, radius } => Shape::Cylinder {
+                a: pose * a,
+                b: pose * b,
+                radius,
+            },
+            Shape::Capsule { a, b, radius } => Shape::Capsule {
+                a: pose * a,
+                b: pose * b,
+                radius,
+            },
+            Shape::Cuboid {
+                center,
+                rotation,
+                half,
+            } => Shape::Cuboid {
+                center: pose * center,
+                rotation: pose.rotation * rotation,
+                half,
+            },
         }
     }
 
     /// Centre and radius of a sphere enclosing the shape (for screen-space culling).
     fn bounding_sphere(&self) -> (Vector, f32) {
         match *self {
-            Shape::Cylinder { a, b, radius } => {
-                ((a + b) * 0.5, (b - a).length() * 0.5 + radius)
-            }
+            Shape::Cylinder { a, b, radius } => ((a + b) * 0.5, (b - a).length() * 0.5 + radius),
             Shape::Capsule { a, b, radius } => ((a + b) * 0.5, (b - a).length() * 0.5 + radius),
             Shape::Cuboid { center, half, .. } => (center, half.length()),
         }
@@ -39,7 +55,11 @@ impl Shape {
         match *self {
             Shape::Cylinder { a, b, radius } => cylinder(ro, rd, a, b, radius),
             Shape::Capsule { a, b, radius } => capsule(ro, rd, a, b, radius),
-            Shape::Cuboid { center, rotation, half } => cuboid(ro, rd, center, rotation, half),
+            Shape::Cuboid {
+                center,
+                rotation,
+                half,
+            } => cuboid(ro, rd, center, rotation, half),
         }
     }
 }
@@ -152,7 +172,9 @@ impl Renderer {
             }
         }
         for p in primitives {
-            let Some([x0, y0, x1, y1]) = self.screen_bounds(&p.shape) else { continue };
+            let Some([x0, y0, x1, y1]) = self.screen_bounds(&p.shape) else {
+                continue;
+            };
             for py in y0..y1 {
                 for px in x0..x1 {
                     let i = py * n + px;
@@ -185,8 +207,8 @@ impl Renderer {
                         }
                         let lambert = self.normal[i].dot(light).max(0.0);
                         let shade = AMBIENT + DIFFUSE * lambert;
-                        for c in 0..3 {
-                            acc[c] += self.color[i][c] * shade;
+                        for (a, c) in acc.iter_mut().zip(self.color[i]) {
+                            *a += c * shade;
                         }
                     }
                 }
@@ -223,7 +245,12 @@ impl Renderer {
             return None;
         }
         let clamp = |v: f32| v.clamp(0.0, n) as usize;
-        Some([clamp(lo[0]), clamp(lo[1]), clamp(hi[0] + 1.0), clamp(hi[1] + 1.0)])
+        Some([
+            clamp(lo[0]),
+            clamp(lo[1]),
+            clamp(hi[0] + 1.0),
+            clamp(hi[1] + 1.0),
+        ])
     }
 }
 
@@ -253,7 +280,7 @@ fn capsule(ro: Vector, rd: Vector, a: Vector, b: Vector, r: f32) -> Option<(f32,
         }
         t = -b2 - h2.sqrt();
     }
-    if !(t > 0.0) {
+    if t.is_nan() || t <= 0.0 {
         return None;
     }
     let p = ro + rd * t - a;

@@ -12,7 +12,11 @@ pub const SUBSTEPS: usize = 3;
 pub const DT: f32 = 1.0 / 60.0;
 
 /// The table top seen by the camera (z = 0, arm base at the origin).
-pub const TABLE: Table = Table { x: [-0.55, 0.55], y: [-0.12, 1.0], color: [0.17, 0.17, 0.17] };
+pub const TABLE: Table = Table {
+    x: [-0.55, 0.55],
+    y: [-0.12, 1.0],
+    color: [0.17, 0.17, 0.17],
+};
 /// The fixed camera: behind and above the arm base, looking down the table.
 pub const CAMERA: Camera = Camera {
     eye: Vector::new(0.0, -0.30, 1.50),
@@ -69,8 +73,14 @@ impl Scene {
         let c = ColliderBuilder::cuboid(0.6, 0.7, 0.05)
             .translation(Vector::new(0.0, 0.45, -0.05))
             .friction(0.5)
-            .collision_groups(InteractionGroups::new(TABLE_GROUP, OBJECT, InteractionTestMode::And));
-        world.colliders.insert_with_parent(c, table, &mut world.bodies);
+            .collision_groups(InteractionGroups::new(
+                TABLE_GROUP,
+                OBJECT,
+                InteractionTestMode::And,
+            ));
+        world
+            .colliders
+            .insert_with_parent(c, table, &mut world.bodies);
 
         // Object.
         let [ox, oy] = object;
@@ -83,18 +93,34 @@ impl Scene {
             .rotation(Vector::X * core::f32::consts::FRAC_PI_2)
             .density(350.0)
             .friction(1.2)
-            .collision_groups(InteractionGroups::new(OBJECT, Group::ALL, InteractionTestMode::And));
-        world.colliders.insert_with_parent(c, body, &mut world.bodies);
+            .collision_groups(InteractionGroups::new(
+                OBJECT,
+                Group::ALL,
+                InteractionTestMode::And,
+            ));
+        world
+            .colliders
+            .insert_with_parent(c, body, &mut world.bodies);
         let h = Vector::new(0.0, 0.0, OBJECT_HALF_HEIGHT);
         visuals.push(Visual {
             body,
-            parts: vec![prim(Shape::Cylinder { a: -h, b: h, radius: OBJECT_RADIUS }, YELLOW)],
+            parts: vec![prim(
+                Shape::Cylinder {
+                    a: -h,
+                    b: h,
+                    radius: OBJECT_RADIUS,
+                },
+                YELLOW,
+            )],
         });
         let object_body = body;
 
         // Arm: the base is the multibody's fixed root, every link starts world-aligned on its joint.
         let base = world.bodies.insert(RigidBodyBuilder::fixed());
-        visuals.push(Visual { body: base, parts: link_parts(0) });
+        visuals.push(Visual {
+            body: base,
+            parts: link_parts(0),
+        });
         let mut parent = base;
         let mut joints = Vec::new();
         let mut tcp_link = base;
@@ -127,7 +153,10 @@ impl Scene {
             for part in &parts {
                 attach_collider(&mut world, link, &part.shape, origin, 0.8);
             }
-            visuals.push(Visual { body: link, parts: shift(parts, origin) });
+            visuals.push(Visual {
+                body: link,
+                parts: shift(parts, origin),
+            });
             parent = link;
             tcp_link = link;
         }
@@ -145,7 +174,11 @@ impl Scene {
                     .translation(centre)
                     .gravity_scale(0.0)
                     .can_sleep(false)
-                    .additional_mass_properties(MassProperties::new(Vector::ZERO, 0.3, Vector::splat(1e-3))),
+                    .additional_mass_properties(MassProperties::new(
+                        Vector::ZERO,
+                        0.3,
+                        Vector::splat(1e-3),
+                    )),
             );
             let joint = PrismaticJointBuilder::new(closing * -side)
                 .local_anchor1(centre - wrist)
@@ -160,9 +193,16 @@ impl Scene {
                 .expect("a fresh multibody accepts every finger");
             fingers.push(handle);
             let half = Vector::new(0.035, 0.014, 0.008);
-            let shape = Shape::Cuboid { center: Vector::ZERO, rotation: rapier3d::math::Rotation::IDENTITY, half };
+            let shape = Shape::Cuboid {
+                center: Vector::ZERO,
+                rotation: rapier3d::math::Rotation::IDENTITY,
+                half,
+            };
             attach_collider(&mut world, finger, &shape, Vector::ZERO, 1.5);
-            visuals.push(Visual { body: finger, parts: vec![prim(shape, WHITE)] });
+            visuals.push(Visual {
+                body: finger,
+                parts: vec![prim(shape, WHITE)],
+            });
         }
 
         let mut scene = Scene {
@@ -179,13 +219,21 @@ impl Scene {
 
     /// Teleport the arm to joint angles `q` (used once, to start at the home pose).
     fn set_configuration(&mut self, q: &[f32; ARM_JOINTS]) {
-        let (mb, _) = self.world.multibody_joints.get(self.joints[0]).expect("arm joint");
+        let (mb, _) = self
+            .world
+            .multibody_joints
+            .get(self.joints[0])
+            .expect("arm joint");
         let mut disp = vec![0.0; mb.ndofs()];
         for (h, qi) in self.joints.iter().zip(q) {
             let (mb, id) = self.world.multibody_joints.get(*h).expect("arm joint");
             disp[mb.link(id).expect("arm link").assembly_id()] = *qi;
         }
-        let (mb, _) = self.world.multibody_joints.get_mut(self.joints[0]).expect("arm joint");
+        let (mb, _) = self
+            .world
+            .multibody_joints
+            .get_mut(self.joints[0])
+            .expect("arm joint");
         mb.apply_displacements(&disp);
         mb.forward_kinematics(&self.world.bodies, true);
         mb.update_rigid_bodies(&mut self.world.bodies, true);
@@ -195,14 +243,28 @@ impl Scene {
     /// Motor targets: joint angles and velocities, and the gripper closure in [0, 1].
     pub fn set_targets(&mut self, q: &[f32; ARM_JOINTS], qdot: &[f32; ARM_JOINTS], closure: f32) {
         for i in 0..ARM_JOINTS {
-            let (mb, id) = self.world.multibody_joints.get_mut(self.joints[i]).expect("arm joint");
+            let (mb, id) = self
+                .world
+                .multibody_joints
+                .get_mut(self.joints[i])
+                .expect("arm joint");
             let joint = &mut mb.link_mut(id).expect("arm link").joint.data;
             joint.set_motor(JointAxis::AngX, q[i], qdot[i], ARM_STIFFNESS, ARM_DAMPING);
         }
         for h in self.fingers {
-            let (mb, id) = self.world.multibody_joints.get_mut(h).expect("finger joint");
+            let (mb, id) = self
+                .world
+                .multibody_joints
+                .get_mut(h)
+                .expect("finger joint");
             let joint = &mut mb.link_mut(id).expect("finger link").joint.data;
-            joint.set_motor(JointAxis::LinX, closure * FINGER_TRAVEL, 0.0, FINGER_STIFFNESS, FINGER_DAMPING);
+            joint.set_motor(
+                JointAxis::LinX,
+                closure * FINGER_TRAVEL,
+                0.0,
+                FINGER_STIFFNESS,
+                FINGER_DAMPING,
+            );
         }
     }
 
@@ -251,7 +313,10 @@ impl Scene {
         for vis in &self.visuals {
             let pose = self.world.bodies[vis.body].position();
             for p in &vis.parts {
-                out.push(Primitive { shape: p.shape.transformed(pose), color: p.color });
+                out.push(Primitive {
+                    shape: p.shape.transformed(pose),
+                    color: p.color,
+                });
             }
         }
     }
@@ -264,23 +329,42 @@ fn prim(shape: Shape, color: [f32; 3]) -> Primitive {
 /// Move parts given in world coordinates at q = 0 into the frame of a body whose origin is `origin`.
 fn shift(parts: Vec<Primitive>, origin: Vector) -> Vec<Primitive> {
     let pose = rapier3d::math::Pose::from_translation(-origin);
-    parts.into_iter().map(|p| prim(p.shape.transformed(&pose), p.color)).collect()
+    parts
+        .into_iter()
+        .map(|p| prim(p.shape.transformed(&pose), p.color))
+        .collect()
 }
 
 /// A collider matching a solid (capsule for round parts, cuboid for boxes), in the body frame.
-fn attach_collider(world: &mut PhysicsWorld, body: RigidBodyHandle, shape: &Shape, origin: Vector, friction: f32) {
+fn attach_collider(
+    world: &mut PhysicsWorld,
+    body: RigidBodyHandle,
+    shape: &Shape,
+    origin: Vector,
+    friction: f32,
+) {
     let builder = match *shape {
         Shape::Cylinder { a, b, radius } | Shape::Capsule { a, b, radius } => {
             ColliderBuilder::capsule_from_endpoints(a - origin, b - origin, radius)
         }
-        Shape::Cuboid { center, rotation, half } => ColliderBuilder::cuboid(half.x, half.y, half.z)
+        Shape::Cuboid {
+            center,
+            rotation,
+            half,
+        } => ColliderBuilder::cuboid(half.x, half.y, half.z)
             .position(rapier3d::math::Pose::from_parts(center - origin, rotation)),
     };
     let c = builder
         .density(0.0)
         .friction(friction)
-        .collision_groups(InteractionGroups::new(ARM, OBJECT, InteractionTestMode::And));
-    world.colliders.insert_with_parent(c, body, &mut world.bodies);
+        .collision_groups(InteractionGroups::new(
+            ARM,
+            OBJECT,
+            InteractionTestMode::And,
+        ));
+    world
+        .colliders
+        .insert_with_parent(c, body, &mut world.bodies);
 }
 
 /// The solids of link `i` (0 = base) at q = 0, in world coordinates: light tubes, dark
@@ -289,10 +373,15 @@ fn link_parts(i: usize) -> Vec<Primitive> {
     let p = |k: usize| v(Arm::JOINT_POINTS[k]);
     let x = Vector::X;
     let z = Vector::Z;
-    let cyl = |a: Vector, b: Vector, radius: f32, color| prim(Shape::Cylinder { a, b, radius }, color);
-    let cap = |a: Vector, b: Vector, radius: f32, color| prim(Shape::Capsule { a, b, radius }, color);
+    let cyl =
+        |a: Vector, b: Vector, radius: f32, color| prim(Shape::Cylinder { a, b, radius }, color);
+    let cap =
+        |a: Vector, b: Vector, radius: f32, color| prim(Shape::Capsule { a, b, radius }, color);
     match i {
-        0 => vec![cyl(Vector::ZERO, z * 0.055, 0.075, BLUE), cyl(z * 0.055, z * 0.07, 0.062, DARK)],
+        0 => vec![
+            cyl(Vector::ZERO, z * 0.055, 0.075, BLUE),
+            cyl(z * 0.055, z * 0.07, 0.062, DARK),
+        ],
         // Shoulder: vertical housing, cap on the lift axis.
         1 => vec![
             cyl(z * 0.07, p(1) + z * 0.02, 0.06, DARK),
@@ -330,9 +419,7 @@ fn link_parts(i: usize) -> Vec<Primitive> {
         _ => {
             let tool = v(Arm::TOOL_AXIS);
             let flange = v(Arm::FLANGE);
-            let closing = v(Arm::CLOSING_AXIS);
             let half = Vector::new(0.02, 0.025, FINGER_OPEN + 0.012);
-            let _ = closing;
             vec![
                 cyl(p(5) - x * 0.06, flange, 0.033, DARK),
                 prim(

@@ -41,13 +41,26 @@ impl Simulator {
 
     /// An episode with the object at `(x, y)` on the table; `seed` still varies the timing
     /// and the free parameters of the script.
-    pub fn with_object(action: Action, x: f32, y: f32, seed: u64, image_size: u32) -> Result<Self, SimError> {
+    pub fn with_object(
+        action: Action,
+        x: f32,
+        y: f32,
+        seed: u64,
+        image_size: u32,
+    ) -> Result<Self, SimError> {
         if image_size != 64 && image_size != 128 {
             return Err(SimError::ImageSize(image_size));
         }
         let (rx, ry) = Self::REGION;
         if !(x >= rx[0] && x <= rx[1] && y >= ry[0] && y <= ry[1]) {
-            return Err(SimError::ObjectOutOfRegion { x, y, x0: rx[0], x1: rx[1], y0: ry[0], y1: ry[1] });
+            return Err(SimError::ObjectOutOfRegion {
+                x,
+                y,
+                x0: rx[0],
+                x1: rx[1],
+                y0: ry[0],
+                y1: ry[1],
+            });
         }
         let mut rng = Pcg64::seed_from_u64(seed ^ PLAN_STREAM);
         let plan = Plan::new(action, [x, y], &mut rng);
@@ -82,7 +95,10 @@ impl Simulator {
             return false;
         }
         let (from, to) = (self.plan.joints[self.step], self.plan.joints[self.step + 1]);
-        let (c0, c1) = (self.plan.closure[self.step], self.plan.closure[self.step + 1]);
+        let (c0, c1) = (
+            self.plan.closure[self.step],
+            self.plan.closure[self.step + 1],
+        );
         let span = SUBSTEPS as f32 * DT;
         let mut qdot = [0.0; ARM_JOINTS];
         for i in 0..ARM_JOINTS {

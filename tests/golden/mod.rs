@@ -4,4 +4,4 @@
 
 /// `episode(Action::Grasp, 7, 64)?.digest()`.
 pub const GOLDEN_GRASP_SEED7_64: &str =
-    "11b0e85f36f1eb1c3bd78aed7afe2c1ca0529ce7107e97c55f9cde9aa62117fd";
+    "ec2591e28c641877c9137eea8822b8d4651c90809da963e137719bf6d635f4af";

@@ -1,0 +1,232 @@
+//! The `dmbn` command line (native only).
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::mpsc;
+use std::thread;
+
+use clap::{Parser, Subcommand};
+use indicatif::{ProgressBar, ProgressStyle};
+use thiserror::Error;
+
+use dmbn::data::{DataError, Dataset, DatasetWriter, Sequence, Summary};
+use dmbn::sim::{self, Action, SimError};
+
+#[derive(Parser)]
+#[command(name = "dmbn", version, about = "DMBN datasets: simulate and inspect")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Generate a dataset with the simulator, in the DMBN layout with PNG frames.
+    ///
+    /// Sequence id i (0..N) of every action uses seed S + i, so a dataset is reproduced
+    /// exactly from (N, S, image size). The dataset is built in `<out>.tmp-<pid>` and renamed
+    /// to OUT at the end: an interrupted run leaves no partial OUT.
+    Simulate {
+        /// Output folder; must not exist or be empty.
+        #[arg(long)]
+        out: PathBuf,
+        /// Sequences per action.
+        #[arg(long, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+        sequences: u32,
+        /// Base seed: sequence i uses seed + i.
+        #[arg(long)]
+        seed: u64,
+        /// Frame size in pixels.
+        #[arg(long, default_value_t = 64, value_parser = parse_image_size)]
+        image_size: u32,
+        /// Actions to record, comma separated.
+        #[arg(long, value_delimiter = ',', default_value = "grasp,move")]
+        actions: Vec<Action>,
+        /// Worker threads (default: available cores).
+        #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1024))]
+        jobs: Option<u32>,
+    },
+    /// Read and validate every sequence of a dataset, then print a summary.
+    Inspect {
+        /// Dataset root: numeric id folders holding grasp/ and move/.
+        dir: PathBuf,
+    },
+}
+
+/// Everything a command can fail with; printed as `error: <message>`.
+#[derive(Debug, Error)]
+enum CliError {
+    #[error(transparent)]
+    Data(#[from] DataError),
+    #[error("sequence {id} ({action}, seed {seed}): {source}")]
+    Sim {
+        id: u32,
+        action: Action,
+        seed: u64,
+        #[source]
+        source: SimError,
+    },
+    #[error("{0}")]
+    Worker(String),
+}
+
+fn parse_image_size(s: &str) -> Result<u32, String> {
+    match s.parse::<u32>() {
+        Ok(n @ (64 | 128)) => Ok(n),
+        _ => Err(format!(
+            "{s:?} is not a supported image size: expected 64 or 128"
+        )),
+    }
+}
+
+pub fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Simulate {
+            out,
+            sequences,
+            seed,
+            image_size,
+            actions,
+            jobs,
+        } => {
+            let mut unique = Vec::new();
+            for a in actions {
+                if !unique.contains(&a) {
+                    unique.push(a);
+                }
+            }
+            simulate(out, sequences, seed, image_size, &unique, jobs)
+        }
+        Command::Inspect { dir } => inspect(dir),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn progress(len: usize, what: &str) -> ProgressBar {
+    let bar = ProgressBar::new(len as u64);
+    if let Ok(style) =
+        ProgressStyle::with_template("{msg} [{bar:40}] {pos}/{len} ({elapsed}, eta {eta})")
+    {
+        bar.set_style(style.progress_chars("=> "));
+    }
+    bar.set_message(what.to_string());
+    bar
+}
+
+/// One finished episode, sent from a worker to the writing thread.
+type Job = (u32, Action, u64, Result<Sequence, SimError>);
+
+fn simulate(
+    out: PathBuf,
+    sequences: u32,
+    seed: u64,
+    image_size: u32,
+    actions: &[Action],
+    jobs: Option<u32>,
+) -> Result<(), CliError> {
+    let mut writer = DatasetWriter::create(&out)?;
+    let tasks: Vec<(u32, Action)> = (0..sequences)
+        .flat_map(|id| actions.iter().map(move |&a| (id, a)))
+        .collect();
+    let workers = jobs.map_or_else(
+        || thread::available_parallelism().map_or(1, |n| n.get()),
+        |j| j as usize,
+    );
+    let workers = workers.min(tasks.len()).max(1);
+    let bar = progress(tasks.len(), "simulate");
+    let next = AtomicUsize::new(0);
+    let stop = AtomicBool::new(false);
+
+    let result = thread::scope(|s| -> Result<(), CliError> {
+        let (tx, rx) = mpsc::sync_channel::<Job>(workers * 2);
+        for _ in 0..workers {
+            let tx = tx.clone();
+            let (tasks, next, stop) = (&tasks, &next, &stop);
+            s.spawn(move || {
+                while !stop.load(Ordering::Relaxed) {
+                    let Some(&(id, action)) = tasks.get(next.fetch_add(1, Ordering::Relaxed))
+                    else {
+                        break;
+                    };
+                    let seed = seed.wrapping_add(u64::from(id));
+                    let seq = sim::episode(action, seed, image_size);
+                    if tx.send((id, action, seed, seq)).is_err() {
+                        break;
+                    }
+                }
+            });
+        }
+        drop(tx);
+        let outcome = write_all(rx, &mut writer, &bar);
+        stop.store(true, Ordering::Relaxed);
+        outcome
+    });
+    bar.finish_and_clear();
+    result?;
+    if writer.written() != tasks.len() {
+        return Err(CliError::Worker(format!(
+            "only {} of {} sequences were generated",
+            writer.written(),
+            tasks.len()
+        )));
+    }
+    let written = writer.written();
+    let names: Vec<&str> = actions.iter().map(|a| a.name()).collect();
+    let out = writer.finish()?;
+    println!(
+        "wrote {written} sequences ({sequences} per action: {}; seeds {seed}..={}; {image_size}x{image_size} frames) to {}",
+        names.join(", "),
+        seed.wrapping_add(u64::from(sequences - 1)),
+        out.display()
+    );
+    Ok(())
+}
+
+/// Write episodes as they arrive; returns at the first failure, dropping `rx` so workers
+/// blocked on a full channel see it closed and stop.
+fn write_all(
+    rx: mpsc::Receiver<Job>,
+    writer: &mut DatasetWriter,
+    bar: &ProgressBar,
+) -> Result<(), CliError> {
+    for (id, action, seed, seq) in rx {
+        let seq = seq.map_err(|source| CliError::Sim {
+            id,
+            action,
+            seed,
+            source,
+        })?;
+        writer.write(id, action.name(), &seq)?;
+        bar.inc(1);
+    }
+    Ok(())
+}
+
+fn inspect(dir: PathBuf) -> Result<(), CliError> {
+    let dataset = Dataset::open(&dir)?;
+    let bar = progress(dataset.len(), "inspect");
+    let mut summary = Summary::new();
+    for seq_ref in dataset.sequences() {
+        let seq = dataset.read(seq_ref, None);
+        let seq = match seq {
+            Ok(seq) => seq,
+            Err(e) => {
+                bar.finish_and_clear();
+                return Err(e.into());
+            }
+        };
+        summary.add(seq_ref.id, &seq_ref.action, &seq);
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    println!("dataset {}: valid", dataset.root().display());
+    print!("{summary}");
+    Ok(())
+}

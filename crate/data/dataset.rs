@@ -1,0 +1,113 @@
+use std::fs;
+use std::path::{Path, PathBuf};
+
+use super::layout::valid_action_name;
+use super::{read_sequence, DataError, Sequence, SequenceRef};
+
+/// A dataset in the DMBN layout: `<root>/<id>/<action>/` folders. Opening only lists the
+/// sequences; reading (and validating) each is [`read`](Self::read)'s job.
+#[derive(Debug, Clone)]
+pub struct Dataset {
+    root: PathBuf,
+    sequences: Vec<SequenceRef>,
+}
+
+impl Dataset {
+    /// List the sequences under `root`: every folder with a decimal name is an id, every
+    /// non-hidden folder inside it an action. Other entries (a LICENSE file, hidden folders)
+    /// are ignored. Sequences are sorted by id, then action name.
+    pub fn open(root: impl AsRef<Path>) -> Result<Self, DataError> {
+        let root = root.as_ref().to_path_buf();
+        let meta = fs::metadata(&root).map_err(DataError::io(&root))?;
+        if !meta.is_dir() {
+            return Err(DataError::NotADirectory { path: root });
+        }
+        let mut sequences = Vec::new();
+        for (id, id_dir) in subdirs(&root)? {
+            let Some(id) = parse_id(&id) else { continue };
+            let mut actions: Vec<SequenceRef> = subdirs(&id_dir)?
+                .into_iter()
+                .filter(|(name, _)| valid_action_name(name))
+                .map(|(action, dir)| SequenceRef { id, action, dir })
+                .collect();
+            if actions.is_empty() {
+                return Err(DataError::NoActions { path: id_dir });
+            }
+            sequences.append(&mut actions);
+        }
+        if sequences.is_empty() {
+            return Err(DataError::NoSequences { path: root });
+        }
+        sequences.sort_by(|a, b| (a.id, &a.action).cmp(&(b.id, &b.action)));
+        Ok(Dataset { root, sequences })
+    }
+
+    /// The folder the dataset was opened from.
+    pub fn root(&self) -> &Path {
+        &self.root
+    }
+
+    /// Every sequence, by id then action.
+    pub fn sequences(&self) -> &[SequenceRef] {
+        &self.sequences
+    }
+
+    /// Number of sequences (all actions).
+    pub fn len(&self) -> usize {
+        self.sequences.len()
+    }
+
+    /// Never true for an opened dataset; here for API symmetry with `len`.
+    pub fn is_empty(&self) -> bool {
+        self.sequences.is_empty()
+    }
+
+    /// Distinct ids, ascending.
+    pub fn ids(&self) -> Vec<u32> {
+        let mut ids: Vec<u32> = self.sequences.iter().map(|s| s.id).collect();
+        ids.dedup();
+        ids
+    }
+
+    /// Distinct action names, sorted.
+    pub fn actions(&self) -> Vec<String> {
+        let mut actions: Vec<String> = self.sequences.iter().map(|s| s.action.clone()).collect();
+        actions.sort();
+        actions.dedup();
+        actions
+    }
+
+    /// The sequences of one action, by id.
+    pub fn of_action<'a>(&'a self, action: &'a str) -> impl Iterator<Item = &'a SequenceRef> + 'a {
+        self.sequences.iter().filter(move |s| s.action == action)
+    }
+
+    /// Read and validate one sequence; frames resized to `image_size` when given.
+    pub fn read(&self, seq: &SequenceRef, image_size: Option<u32>) -> Result<Sequence, DataError> {
+        read_sequence(&seq.dir, seq.id, image_size)
+    }
+}
+
+/// `(name, path)` of the subdirectories of `dir` with UTF-8 names.
+fn subdirs(dir: &Path) -> Result<Vec<(String, PathBuf)>, DataError> {
+    let mut out = Vec::new();
+    for entry in fs::read_dir(dir).map_err(DataError::io(dir))? {
+        let entry = entry.map_err(DataError::io(dir))?;
+        let path = entry.path();
+        if !path.is_dir() {
+            continue;
+        }
+        if let Ok(name) = entry.file_name().into_string() {
+            out.push((name, path));
+        }
+    }
+    Ok(out)
+}
+
+/// A decimal id folder name (`"7"`, `"40"`); anything else is not an id.
+fn parse_id(name: &str) -> Option<u32> {
+    if name.is_empty() || !name.bytes().all(|b| b.is_ascii_digit()) {
+        return None;
+    }
+    name.parse().ok()
+}

@@ -1,0 +1,204 @@
+//! Reading one sequence folder of the DMBN layout, validating every file on the way.
+use std::collections::HashMap;
+use std::fs;
+use std::path::{Path, PathBuf};
+
+use image::imageops::FilterType;
+use image::RgbImage;
+
+use super::layout::{endpoint_path, joint_path, object_path, MAX_IMAGE_SIZE};
+use super::{DataError, Sequence, ENDPOINT, JOINTS};
+
+/// Frame file extensions, in order of preference when one step has several.
+const FRAME_EXTENSIONS: [&str; 3] = ["png", "jpeg", "jpg"];
+
+/// Read the sequence in `dir` (`joint_<id>.txt`, `object_<id>.txt`, `endpoint_<id>.txt` and
+/// frames `0.png`/`0.jpeg` …). Frames beyond the joint rows are ignored (the original folders
+/// often hold a few). With `image_size`, frames are resized to that many pixels per side: an
+/// exact area average when it divides the stored size (128 → 64), otherwise a triangle filter;
+/// both deterministic.
+pub fn read_sequence(dir: &Path, id: u32, image_size: Option<u32>) -> Result<Sequence, DataError> {
+    if let Some(size) = image_size {
+        if size == 0 || size > MAX_IMAGE_SIZE {
+            return Err(DataError::ImageSize { size });
+        }
+    }
+    let joint_file = joint_path(dir, id);
+    let joints: Vec<[f32; JOINTS]> = read_table(&joint_file)?;
+    let object: Vec<[f32; 3]> = read_table(&object_path(dir, id))?;
+    let endpoint: Vec<[f32; ENDPOINT]> = read_table(&endpoint_path(dir, id))?;
+    let rows = joints.len();
+    for (path, found) in [
+        (object_path(dir, id), object.len()),
+        (endpoint_path(dir, id), endpoint.len()),
+    ] {
+        if found != rows {
+            return Err(DataError::RowMismatch {
+                path,
+                found,
+                expected: rows,
+                reference: joint_file,
+            });
+        }
+    }
+
+    let paths = frame_paths(dir, rows)?;
+    let mut frames = Vec::new();
+    let mut size = None;
+    for path in &paths {
+        let img = read_frame(path)?;
+        let expected = *size.get_or_insert(img.width());
+        if img.dimensions() != (expected, expected) {
+            return Err(DataError::FrameSize {
+                path: path.clone(),
+                expected,
+                found: img.dimensions(),
+            });
+        }
+        let img = match image_size {
+            Some(target) if target != expected => resize(&img, target),
+            _ => img,
+        };
+        frames.extend_from_slice(img.as_raw());
+    }
+    Ok(Sequence {
+        image_size: image_size.or(size).unwrap_or(0),
+        joints,
+        endpoint,
+        object,
+        frames,
+    })
+}
+
+/// Parse a whitespace-separated table of `N` finite numbers per row. Trailing blank lines are
+/// allowed; any other line must have exactly `N` values.
+pub(crate) fn read_table<const N: usize>(path: &Path) -> Result<Vec<[f32; N]>, DataError> {
+    let text = fs::read_to_string(path).map_err(DataError::io(path))?;
+    let lines: Vec<&str> = text.lines().collect();
+    let used = lines
+        .iter()
+        .rposition(|l| !l.trim().is_empty())
+        .map_or(0, |i| i + 1);
+    let mut rows = Vec::with_capacity(used);
+    for (i, line) in lines[..used].iter().enumerate() {
+        let fields: Vec<&str> = line.split_whitespace().collect();
+        if fields.len() != N {
+            return Err(DataError::Columns {
+                path: path.to_path_buf(),
+                line: i + 1,
+                expected: N,
+                found: fields.len(),
+            });
+        }
+        let mut row = [0.0f32; N];
+        for (c, (field, value)) in fields.iter().zip(row.iter_mut()).enumerate() {
+            *value = match field.parse::<f32>() {
+                Ok(v) if v.is_finite() => v,
+                _ => {
+                    return Err(DataError::NonNumeric {
+                        path: path.to_path_buf(),
+                        line: i + 1,
+                        column: c + 1,
+                        text: (*field).to_string(),
+                    })
+                }
+            };
+        }
+        rows.push(row);
+    }
+    if rows.is_empty() {
+        return Err(DataError::NoRows {
+            path: path.to_path_buf(),
+        });
+    }
+    Ok(rows)
+}
+
+/// Paths of frames `0..rows` in `dir`, checking there are enough and none is missing.
+fn frame_paths(dir: &Path, rows: usize) -> Result<Vec<PathBuf>, DataError> {
+    // step index -> (preference, path)
+    let mut found: HashMap<usize, (usize, PathBuf)> = HashMap::new();
+    for entry in fs::read_dir(dir).map_err(DataError::io(dir))? {
+        let entry = entry.map_err(DataError::io(dir))?;
+        let name = entry.file_name();
+        let Some(name) = name.to_str() else { continue };
+        let Some((stem, ext)) = name.rsplit_once('.') else {
+            continue;
+        };
+        let Some(pref) = FRAME_EXTENSIONS
+            .iter()
+            .position(|e| e.eq_ignore_ascii_case(ext))
+        else {
+            continue;
+        };
+        if stem.is_empty() || !stem.bytes().all(|b| b.is_ascii_digit()) {
+            continue;
+        }
+        let Ok(index) = stem.parse::<usize>() else {
+            continue;
+        };
+        let path = entry.path();
+        found
+            .entry(index)
+            .and_modify(|cur| {
+                if pref < cur.0 {
+                    *cur = (pref, path.clone());
+                }
+            })
+            .or_insert((pref, path));
+    }
+    if found.len() < rows {
+        return Err(DataError::FewerFrames {
+            dir: dir.to_path_buf(),
+            frames: found.len(),
+            rows,
+        });
+    }
+    (0..rows)
+        .map(|index| {
+            found
+                .remove(&index)
+                .map(|(_, p)| p)
+                .ok_or_else(|| DataError::MissingFrame {
+                    dir: dir.to_path_buf(),
+                    index,
+                    rows,
+                })
+        })
+        .collect()
+}
+
+/// Decode one frame (format from its content) as RGB8.
+fn read_frame(path: &Path) -> Result<RgbImage, DataError> {
+    let bytes = fs::read(path).map_err(DataError::io(path))?;
+    let img = image::load_from_memory(&bytes).map_err(|source| DataError::CorruptFrame {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    Ok(img.to_rgb8())
+}
+
+/// Resize a square frame to `target` pixels per side: an exact, rounded area average when
+/// `target` divides the size (integer arithmetic, identical on every platform), otherwise
+/// image's triangle filter.
+fn resize(img: &RgbImage, target: u32) -> RgbImage {
+    let size = img.width();
+    if target < size && size % target == 0 {
+        let f = size / target;
+        let n = f * f;
+        RgbImage::from_fn(target, target, |x, y| {
+            let mut sum = [0u32; 3];
+            for dy in 0..f {
+                for dx in 0..f {
+                    let p = img.get_pixel(x * f + dx, y * f + dy);
+                    for (s, v) in sum.iter_mut().zip(p.0) {
+                        *s += u32::from(v);
+                    }
+                }
+            }
+            image::Rgb(sum.map(|s| ((s + n / 2) / n) as u8))
+        })
+    } else {
+        image::imageops::resize(img, target, target, FilterType::Triangle)
+    }
+}

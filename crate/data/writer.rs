@@ -1,0 +1,123 @@
+//! Writing one sequence in the DMBN layout, each file atomically.
+use std::fmt::Write as _;
+use std::fs;
+use std::path::{Path, PathBuf};
+
+use image::codecs::png::PngEncoder;
+use image::{ExtendedColorType, ImageEncoder};
+
+use super::layout::{endpoint_path, joint_path, object_path, sequence_dir, valid_action_name};
+use super::{DataError, Sequence};
+
+/// Write `seq` as `<root>/<id>/<action>/<k>.png` plus `joint_<id>.txt`, `object_<id>.txt`
+/// and `endpoint_<id>.txt` (values space separated in Rust's shortest round-trip `{}` format,
+/// so the text is deterministic and reads back to the same `f32`s). Each file is written to a
+/// hidden temporary name and renamed, so a reader never sees a half-written file. Returns the
+/// sequence folder.
+pub fn write_sequence(
+    root: &Path,
+    id: u32,
+    action: &str,
+    seq: &Sequence,
+) -> Result<PathBuf, DataError> {
+    check_sequence(id, action, seq)?;
+    let dir = sequence_dir(root, id, action);
+    fs::create_dir_all(&dir).map_err(DataError::io(&dir))?;
+
+    let size = seq.image_size;
+    for k in 0..seq.len() {
+        let path = dir.join(format!("{k}.png"));
+        let mut png = Vec::new();
+        PngEncoder::new(&mut png)
+            .write_image(seq.frame(k), size, size, ExtendedColorType::Rgb8)
+            .map_err(|source| DataError::Encode {
+                path: path.clone(),
+                source,
+            })?;
+        write_atomic(&path, &png)?;
+    }
+    write_atomic(&joint_path(&dir, id), table(&seq.joints).as_bytes())?;
+    write_atomic(&object_path(&dir, id), table(&seq.object).as_bytes())?;
+    write_atomic(&endpoint_path(&dir, id), table(&seq.endpoint).as_bytes())?;
+    Ok(dir)
+}
+
+/// Write `bytes` to `path` through a temporary sibling and a rename.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), DataError> {
+    let name = path
+        .file_name()
+        .ok_or_else(|| DataError::OutputName {
+            path: path.to_path_buf(),
+        })?
+        .to_string_lossy();
+    let tmp = path.with_file_name(format!(".{name}.tmp-{}", std::process::id()));
+    let result = fs::write(&tmp, bytes)
+        .map_err(DataError::io(&tmp))
+        .and_then(|()| fs::rename(&tmp, path).map_err(DataError::io(path)));
+    if result.is_err() {
+        let _ = fs::remove_file(&tmp);
+    }
+    result
+}
+
+/// Refuse sequences that would not read back: ragged columns, wrong frame bytes, non-finite
+/// values (the reader rejects them), or an unusable action folder name.
+fn check_sequence(id: u32, action: &str, seq: &Sequence) -> Result<(), DataError> {
+    if !valid_action_name(action) {
+        return Err(DataError::ActionName {
+            name: action.to_string(),
+        });
+    }
+    let bad = |reason: String| DataError::InvalidSequence {
+        id,
+        action: action.to_string(),
+        reason,
+    };
+    let t = seq.len();
+    if t == 0 {
+        return Err(bad("it has no step".into()));
+    }
+    if seq.image_size == 0 {
+        return Err(bad("its image size is 0".into()));
+    }
+    if seq.object.len() != t || seq.endpoint.len() != t {
+        return Err(bad(format!(
+            "{t} joint rows but {} object rows and {} endpoint rows",
+            seq.object.len(),
+            seq.endpoint.len()
+        )));
+    }
+    let expected = (seq.image_size as u64).pow(2) * 3 * t as u64;
+    if seq.frames.len() as u64 != expected {
+        return Err(bad(format!(
+            "{} frame bytes, expected {expected} ({t} frames of {size}x{size} RGB)",
+            seq.frames.len(),
+            size = seq.image_size
+        )));
+    }
+    let values = seq
+        .joints
+        .iter()
+        .flatten()
+        .chain(seq.object.iter().flatten())
+        .chain(seq.endpoint.iter().flatten());
+    if let Some(v) = values.into_iter().find(|v| !v.is_finite()) {
+        return Err(bad(format!("it holds the non-finite value {v}")));
+    }
+    Ok(())
+}
+
+/// Rows of numbers as text: space separated, one row per line.
+fn table<const N: usize>(rows: &[[f32; N]]) -> String {
+    let mut out = String::new();
+    for row in rows {
+        for (c, v) in row.iter().enumerate() {
+            if c > 0 {
+                out.push(' ');
+            }
+            let _ = write!(out, "{v}");
+        }
+        out.push('\n');
+    }
+    out
+}

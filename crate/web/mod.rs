@@ -1,0 +1,11 @@
+//! JavaScript bindings (wasm32 only): thin wrappers that convert JS values to the Rust types of
+//! [`crate::sim`] and back. No simulation logic lives here; bad arguments become JS exceptions.
+mod action;
+mod episode;
+mod region;
+mod seed;
+mod simulator;
+
+pub use episode::{run_episode, Episode};
+pub use region::{placement_region, Region};
+pub use simulator::Simulator;
