@@ -9,7 +9,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .get(1)
         .map(String::as_str)
         .unwrap_or("docs/episodes.png");
-    let seed: u64 = args.get(2).map(|s| s.parse()).transpose()?.unwrap_or(3);
+    let seed: u64 = args.get(2).map(|s| s.parse()).transpose()?.unwrap_or(1);
     let size: u32 = args.get(3).map(|s| s.parse()).transpose()?.unwrap_or(128);
     let columns = 8;
     let mut strip = RgbImage::new(size * columns, size * 2);

@@ -221,7 +221,7 @@ function drawChart() {
   }
   g.fillStyle = JOINT_COLORS[ARM];
   g.textAlign = "left";
-  for (const v of ticks(glo, ghi, 4)) {
+  for (const v of ticks(glo, ghi, 5)) {
     g.fillText(fmt(v), w - PAD.right + 6, gy(v));
   }
   g.fillStyle = "#8b93a3";
