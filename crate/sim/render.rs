@@ -254,17 +254,55 @@ impl Renderer {
     }
 }
 
-/// Ray against a capsule (after Inigo Quilez's closed form).
+/// The ray's quadratic against the infinite cylinder of radius `r` around the line a→b,
+/// shared by the capsule and the capped cylinder (after Inigo Quilez's closed forms).
+struct AxisQuadratic {
+    ba: Vector,
+    oa: Vector,
+    baba: f32,
+    bard: f32,
+    baoa: f32,
+    /// Quadratic coefficients `qa t² + 2 qb t + qc` and its discriminant `qb² − qa qc`.
+    qa: f32,
+    qb: f32,
+    h: f32,
+}
+
+impl AxisQuadratic {
+    fn new(ro: Vector, rd: Vector, a: Vector, b: Vector, r: f32) -> AxisQuadratic {
+        let ba = b - a;
+        let oa = ro - a;
+        let baba = ba.dot(ba);
+        let bard = ba.dot(rd);
+        let baoa = ba.dot(oa);
+        let qa = baba - bard * bard;
+        let qb = baba * rd.dot(oa) - baoa * bard;
+        let qc = baba * oa.dot(oa) - baoa * baoa - r * r * baba;
+        AxisQuadratic {
+            ba,
+            oa,
+            baba,
+            bard,
+            baoa,
+            qa,
+            qb,
+            h: qb * qb - qa * qc,
+        }
+    }
+}
+
+/// Ray against a capsule.
 fn capsule(ro: Vector, rd: Vector, a: Vector, b: Vector, r: f32) -> Option<(f32, Vector)> {
-    let ba = b - a;
-    let oa = ro - a;
-    let baba = ba.dot(ba);
-    let bard = ba.dot(rd);
-    let baoa = ba.dot(oa);
-    let qa = baba - bard * bard;
-    let qb = baba * rd.dot(oa) - baoa * bard;
-    let qc = baba * oa.dot(oa) - baoa * baoa - r * r * baba;
-    let h = qb * qb - qa * qc;
+    let AxisQuadratic {
+        ba,
+        oa,
+        baba,
+        bard,
+        baoa,
+        qa,
+        qb,
+        h,
+    } = AxisQuadratic::new(ro, rd, a, b, r);
     if h < 0.0 {
         return None;
     }
@@ -288,31 +326,32 @@ fn capsule(ro: Vector, rd: Vector, a: Vector, b: Vector, r: f32) -> Option<(f32,
     Some((t, (p - ba * k) / r))
 }
 
-/// Ray against a capped cylinder (after Inigo Quilez's closed form).
+/// Ray against a capped cylinder.
 fn cylinder(ro: Vector, rd: Vector, a: Vector, b: Vector, r: f32) -> Option<(f32, Vector)> {
-    let ba = b - a;
-    let oc = ro - a;
-    let baba = ba.dot(ba);
-    let bard = ba.dot(rd);
-    let baoc = ba.dot(oc);
-    let k2 = baba - bard * bard;
-    let k1 = baba * oc.dot(rd) - baoc * bard;
-    let k0 = baba * oc.dot(oc) - baoc * baoc - r * r * baba;
-    let h = k1 * k1 - k2 * k0;
-    if h < 0.0 || k2 <= 1e-12 {
+    let AxisQuadratic {
+        ba,
+        oa,
+        baba,
+        bard,
+        baoa,
+        qa,
+        qb,
+        h,
+    } = AxisQuadratic::new(ro, rd, a, b, r);
+    if h < 0.0 || qa <= 1e-12 {
         return None;
     }
     let h = h.sqrt();
-    let t = (-k1 - h) / k2;
-    let y = baoc + t * bard;
+    let t = (-qb - h) / qa;
+    let y = baoa + t * bard;
     if y > 0.0 && y < baba {
         if t <= 0.0 {
             return None;
         }
-        return Some((t, (oc + rd * t - ba * (y / baba)) / r));
+        return Some((t, (oa + rd * t - ba * (y / baba)) / r));
     }
-    let t = (if y < 0.0 { 0.0 } else { baba } - baoc) / bard;
-    if t > 0.0 && (k1 + k2 * t).abs() < h {
+    let t = (if y < 0.0 { 0.0 } else { baba } - baoa) / bard;
+    if t > 0.0 && (qb + qa * t).abs() < h {
         let sign = if y < 0.0 { -1.0 } else { 1.0 };
         return Some((t, ba * (sign / baba.sqrt())));
     }

@@ -126,17 +126,8 @@ impl Scene {
         let mut tcp_link = base;
         for i in 0..ARM_JOINTS {
             let origin = v(Arm::JOINT_POINTS[i]);
-            let link = world.bodies.insert(
-                RigidBodyBuilder::dynamic()
-                    .translation(origin)
-                    .gravity_scale(0.0)
-                    .can_sleep(false)
-                    .additional_mass_properties(MassProperties::new(
-                        Vector::ZERO,
-                        if i < 3 { 2.0 } else { 0.6 },
-                        Vector::splat(0.01),
-                    )),
-            );
+            let mass = if i < 3 { 2.0 } else { 0.6 };
+            let link = insert_link(&mut world, origin, mass, 0.01);
             let axis = v(Arm::JOINT_AXES[i]);
             let joint = RevoluteJointBuilder::new(axis)
                 .local_anchor1(Arm::anchor(i))
@@ -169,17 +160,7 @@ impl Scene {
         let mut fingers = Vec::new();
         for side in [1.0f32, -1.0] {
             let centre = flange + tool * 0.085 + closing * (side * FINGER_OPEN);
-            let finger = world.bodies.insert(
-                RigidBodyBuilder::dynamic()
-                    .translation(centre)
-                    .gravity_scale(0.0)
-                    .can_sleep(false)
-                    .additional_mass_properties(MassProperties::new(
-                        Vector::ZERO,
-                        0.3,
-                        Vector::splat(1e-3),
-                    )),
-            );
+            let finger = insert_link(&mut world, centre, 0.3, 1e-3);
             let joint = PrismaticJointBuilder::new(closing * -side)
                 .local_anchor1(centre - wrist)
                 .local_anchor2(Vector::ZERO)
@@ -320,6 +301,27 @@ impl Scene {
             }
         }
     }
+}
+
+/// A gravity-compensated multibody link at `origin` (world-aligned), with explicit mass
+/// properties since its colliders have no density.
+fn insert_link(
+    world: &mut PhysicsWorld,
+    origin: Vector,
+    mass: f32,
+    inertia: f32,
+) -> RigidBodyHandle {
+    world.bodies.insert(
+        RigidBodyBuilder::dynamic()
+            .translation(origin)
+            .gravity_scale(0.0)
+            .can_sleep(false)
+            .additional_mass_properties(MassProperties::new(
+                Vector::ZERO,
+                mass,
+                Vector::splat(inertia),
+            )),
+    )
 }
 
 fn prim(shape: Shape, color: [f32; 3]) -> Primitive {
