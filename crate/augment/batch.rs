@@ -1,0 +1,31 @@
+/// A training or inference batch as plain arrays (row-major), independent of any tensor
+/// library: the sampler fills it, the model turns it into tensors.
+///
+/// `B` sequences, up to `N` contexts each (padding marked by `context_mask`), `M` targets each.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Batch {
+    /// B: sequences in the batch.
+    pub batch: usize,
+    /// N: context slots per sequence (the largest context count in the batch).
+    pub contexts: usize,
+    /// M: targets per sequence.
+    pub targets: usize,
+    /// S: frame width and height.
+    pub image_size: usize,
+    /// `[B, N, 3, S, S]`: context frames, RGB scaled to [0, 1], channels first.
+    pub context_images: Vec<f32>,
+    /// `[B, N, 7]`: context joints, normalised with the dataset's statistics.
+    pub context_joints: Vec<f32>,
+    /// `[B, N]`: context times (phase in [0, 1]).
+    pub context_times: Vec<f32>,
+    /// `[B, N]`: 1 for a real context, 0 for padding.
+    pub context_mask: Vec<f32>,
+    /// `[B, M, 3, S, S]`: target frames (empty at inference when only times are given).
+    pub target_images: Vec<f32>,
+    /// `[B, M, 7]`: target joints, normalised (empty at inference).
+    pub target_joints: Vec<f32>,
+    /// `[B, M]`: target times.
+    pub target_times: Vec<f32>,
+    /// `[B]`: blending coefficient c: r = c·r_image + (1 − c)·r_joint.
+    pub blend: Vec<f32>,
+}

@@ -1,0 +1,4 @@
+//! From sequences to what the models consume: context/target sampling into [`Batch`]es.
+mod batch;
+
+pub use batch::Batch;

@@ -1,0 +1,1 @@
+//! DMBN and DMBN-PTE (burn).
