@@ -29,3 +29,13 @@ pub struct Batch {
     /// `[B]`: blending coefficient c: r = c·r_image + (1 − c)·r_joint.
     pub blend: Vec<f32>,
 }
+
+/// Interleaved RGB bytes (`S × S × 3`) to channels-first floats in [0, 1] (`3 × S × S`).
+pub fn planar(rgb: &[u8], s: usize, out: &mut [f32]) {
+    let plane = s * s;
+    for (p, px) in rgb.chunks_exact(3).enumerate() {
+        for c in 0..3 {
+            out[c * plane + p] = px[c] as f32 / 255.0;
+        }
+    }
+}

@@ -82,6 +82,24 @@ impl Dataset {
         self.sequences.iter().filter(move |s| s.action == action)
     }
 
+    /// The sequence `id`/`action`, or an error listing what the dataset holds.
+    pub fn find(&self, id: u32, action: &str) -> Result<&SequenceRef, DataError> {
+        self.sequences
+            .iter()
+            .find(|s| s.id == id && s.action == action)
+            .ok_or_else(|| DataError::UnknownSequence {
+                root: self.root.clone(),
+                id,
+                action: action.to_string(),
+                ids: format!(
+                    "{}..={}",
+                    self.ids().first().copied().unwrap_or(0),
+                    self.ids().last().copied().unwrap_or(0)
+                ),
+                actions: self.actions().join(", "),
+            })
+    }
+
     /// Read and validate one sequence; frames resized to `image_size` when given.
     pub fn read(&self, seq: &SequenceRef, image_size: Option<u32>) -> Result<Sequence, DataError> {
         read_sequence(&seq.dir, seq.id, image_size)

@@ -23,6 +23,14 @@ pub enum DataError {
         index: usize,
         rows: usize,
     },
+    #[error("{}: no sequence {id}/{action}: the dataset holds ids {ids} with actions {actions}", root.display())]
+    UnknownSequence {
+        root: PathBuf,
+        id: u32,
+        action: String,
+        ids: String,
+        actions: String,
+    },
     #[error("{}: cannot decode frame: {source}", path.display())]
     CorruptFrame {
         path: PathBuf,

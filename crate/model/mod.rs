@@ -1,1 +1,52 @@
-//! DMBN and DMBN-PTE (burn).
+//! DMBN and DMBN-PTE in burn, following the paper's Figure 1: context inputs → encoders
+//! ([`ImageEncoder`], [`JointEncoder`]; for DMBN-PTE plus [`TimeProjection`] and
+//! [`ContextProjection`]) → set average and blending ([`masked_mean`], [`blend`]) → target
+//! time → [`Decoder`] ([`ImageDecoder`], [`JointDecoder`]) → mean and σ ([`Prediction`]),
+//! scored by [`gaussian_loss`]. [`Model`] wraps either network with its [`ModelConfig`], and
+//! [`file`] stores it with its [`Normalization`] in one self-describing file.
+//!
+//! Nothing here knows about datasets or files on disk beyond the model file; a [`Batch`]
+//! (plain arrays from the sampler) becomes [`BatchTensors`] through [`tensors`].
+//!
+//! [`Batch`]: crate::augment::Batch
+mod aggregation;
+mod batch_tensors;
+mod config;
+mod context_projection;
+mod decoder;
+mod dmbn;
+mod dmbn_pte;
+mod error;
+pub mod file;
+mod gaussian;
+mod image_decoder;
+mod image_encoder;
+mod joint_decoder;
+mod joint_encoder;
+mod loss;
+#[allow(clippy::module_inception)]
+mod model;
+mod prediction;
+mod time_projection;
+
+pub use crate::data::Normalization;
+pub use aggregation::{blend, masked_mean};
+pub use batch_tensors::{tensors, BatchTensors};
+pub use config::{decoder_filters, encoder_filters, ModelConfig, ModelKind, IMAGE_SIZES};
+pub use context_projection::{ContextProjection, ContextProjectionConfig};
+pub use decoder::{Decoder, DecoderConfig};
+pub use dmbn::{Dmbn, DmbnConfig};
+pub use dmbn_pte::{DmbnPte, DmbnPteConfig};
+pub use error::ModelError;
+#[cfg(not(target_arch = "wasm32"))]
+pub use file::{load, load_expecting, save};
+pub use file::{load_bytes, load_bytes_expecting, read_header, save_bytes, ModelHeader};
+pub use gaussian::bounded_sigma;
+pub use image_decoder::{upsample2, ImageDecoder, ImageDecoderConfig};
+pub use image_encoder::{ImageEncoder, ImageEncoderConfig};
+pub use joint_decoder::{JointDecoder, JointDecoderConfig};
+pub use joint_encoder::{JointEncoder, JointEncoderConfig};
+pub use loss::{gaussian_loss, Loss, LossValues};
+pub use model::{Model, Network};
+pub use prediction::{ContextEncodings, Prediction, Representation};
+pub use time_projection::{TimeProjection, TimeProjectionConfig};

@@ -1,11 +1,13 @@
 //! JavaScript bindings (wasm32 only): thin wrappers that convert JS values to the Rust types of
-//! [`crate::sim`] and back. No simulation logic lives here; bad arguments become JS exceptions.
+//! [`crate::sim`] and [`crate::predict`] and back. No simulation logic lives here; bad arguments become JS exceptions.
 mod action;
 mod episode;
+mod model;
 mod region;
 mod seed;
 mod simulator;
 
 pub use episode::{run_episode, Episode};
+pub use model::{ModelHandle, Prediction};
 pub use region::{placement_region, Region};
 pub use simulator::Simulator;

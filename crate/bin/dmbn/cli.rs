@@ -9,11 +9,18 @@ use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use thiserror::Error;
 
+use crate::predict;
 use dmbn::data::{DataError, Dataset, DatasetWriter, Sequence, Summary};
+use dmbn::figure::FigureError;
+use dmbn::model::ModelError;
 use dmbn::sim::{self, Action, SimError};
 
 #[derive(Parser)]
-#[command(name = "dmbn", version, about = "DMBN datasets: simulate and inspect")]
+#[command(
+    name = "dmbn",
+    version,
+    about = "DMBN datasets and models: simulate, inspect, predict"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -51,11 +58,17 @@ enum Command {
         /// Dataset root: numeric id folders holding grasp/ and move/.
         dir: PathBuf,
     },
+    /// Predict a whole sequence from a few observed steps with a trained model.
+    ///
+    /// Writes mean/<k>.png (predicted frames), sigma/<k>.png (σ heat maps, one scale for the
+    /// sequence), truth/<k>.png, joints.png (true, predicted mean, ±2σ band, observed points)
+    /// and scores.json; prints MSE and NLL of both modalities.
+    Predict(predict::PredictArgs),
 }
 
 /// Everything a command can fail with; printed as `error: <message>`.
 #[derive(Debug, Error)]
-enum CliError {
+pub(crate) enum CliError {
     #[error(transparent)]
     Data(#[from] DataError),
     #[error("sequence {id} ({action}, seed {seed}): {source}")]
@@ -68,9 +81,21 @@ enum CliError {
     },
     #[error("{0}")]
     Worker(String),
+    #[error(transparent)]
+    Model(#[from] ModelError),
+    #[error(transparent)]
+    Figure(#[from] FigureError),
+    #[error("{}: {source}", path.display())]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("{0}")]
+    Usage(String),
 }
 
-fn parse_image_size(s: &str) -> Result<u32, String> {
+pub(crate) fn parse_image_size(s: &str) -> Result<u32, String> {
     match s.parse::<u32>() {
         Ok(n @ (64 | 128)) => Ok(n),
         _ => Err(format!(
@@ -99,6 +124,7 @@ pub fn main() -> ExitCode {
             simulate(out, sequences, seed, image_size, &unique, jobs)
         }
         Command::Inspect { dir } => inspect(dir),
+        Command::Predict(args) => predict::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -109,7 +135,7 @@ pub fn main() -> ExitCode {
     }
 }
 
-fn progress(len: usize, what: &str) -> ProgressBar {
+pub(crate) fn progress(len: usize, what: &str) -> ProgressBar {
     let bar = ProgressBar::new(len as u64);
     if let Ok(style) =
         ProgressStyle::with_template("{msg} [{bar:40}] {pos}/{len} ({elapsed}, eta {eta})")

@@ -3,6 +3,8 @@
 //! only: on wasm32 (where `wasm-pack test` also builds binaries) it is an empty program.
 #[cfg(not(target_arch = "wasm32"))]
 mod cli;
+#[cfg(not(target_arch = "wasm32"))]
+mod predict;
 
 #[cfg(not(target_arch = "wasm32"))]
 fn main() -> std::process::ExitCode {

@@ -1,0 +1,201 @@
+use rand::seq::index;
+use rand::RngExt;
+use rand_pcg::Pcg64;
+
+use crate::data::{Normalization, Sequence, JOINTS};
+
+use super::{planar, Batch};
+
+/// How training batches are drawn (the original drew one sequence, 1-5 contexts and one
+/// target per step; we batch several sequences and targets).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SamplerConfig {
+    /// Sequences per batch (B).
+    pub batch: usize,
+    /// Largest context count; each sequence gets n ~ U{1..max_contexts} (N = max_contexts).
+    pub max_contexts: usize,
+    /// Targets per sequence (M), distinct from the contexts where the sequence allows.
+    pub targets: usize,
+}
+
+/// Draws context/target sets from sequences into [`Batch`]es. Both modalities are observed at
+/// the same context steps; targets are steps that are not contexts.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Sampler {
+    pub config: SamplerConfig,
+}
+
+impl Sampler {
+    pub fn new(config: SamplerConfig) -> Sampler {
+        Sampler { config }
+    }
+
+    /// A batch of `config.batch` sequences picked uniformly from `pool`, with random context
+    /// counts, steps and blending coefficients c ~ U(0, 1).
+    pub fn sample(&self, pool: &[Sequence], norm: &Normalization, rng: &mut Pcg64) -> Batch {
+        let cfg = self.config;
+        let picks: Vec<&Sequence> = (0..cfg.batch)
+            .map(|_| &pool[rng.random_range(0..pool.len())])
+            .collect();
+        let mut batch = empty(
+            cfg.batch,
+            cfg.max_contexts,
+            cfg.targets,
+            picks[0].image_size as usize,
+        );
+        for (b, seq) in picks.into_iter().enumerate() {
+            let t = seq.len();
+            let n = rng.random_range(1..=cfg.max_contexts.min(t.saturating_sub(1)).max(1));
+            let steps = index::sample(rng, t, (n + cfg.targets).min(t)).into_vec();
+            let (contexts, rest) = steps.split_at(n);
+            // Short sequences: reuse non-context steps as targets.
+            let targets: Vec<usize> = (0..cfg.targets)
+                .map(|m| {
+                    if rest.is_empty() {
+                        contexts[0]
+                    } else {
+                        rest[m % rest.len()]
+                    }
+                })
+                .collect();
+            fill(&mut batch, b, seq, contexts, &targets, norm);
+            batch.blend[b] = rng.random_range(0.0f32..=1.0);
+        }
+        batch
+    }
+
+    /// The inference batch for one sequence: observe `contexts` (step indices) with blend `c`,
+    /// predict `targets`. Targets may repeat contexts (reconstruction).
+    pub fn prediction(
+        seq: &Sequence,
+        contexts: &[usize],
+        targets: &[usize],
+        blend: f32,
+        norm: &Normalization,
+    ) -> Batch {
+        let mut batch = empty(1, contexts.len(), targets.len(), seq.image_size as usize);
+        fill(&mut batch, 0, seq, contexts, targets, norm);
+        batch.blend[0] = blend;
+        batch
+    }
+}
+
+/// A zeroed batch of the given dimensions.
+fn empty(b: usize, n: usize, m: usize, s: usize) -> Batch {
+    let px = 3 * s * s;
+    Batch {
+        batch: b,
+        contexts: n,
+        targets: m,
+        image_size: s,
+        context_images: vec![0.0; b * n * px],
+        context_joints: vec![0.0; b * n * JOINTS],
+        context_times: vec![0.0; b * n],
+        context_mask: vec![0.0; b * n],
+        target_images: vec![0.0; b * m * px],
+        target_joints: vec![0.0; b * m * JOINTS],
+        target_times: vec![0.0; b * m],
+        blend: vec![0.0; b],
+    }
+}
+
+/// Write sequence `seq`'s `contexts` and `targets` into slot `b` of `batch`.
+fn fill(
+    batch: &mut Batch,
+    b: usize,
+    seq: &Sequence,
+    contexts: &[usize],
+    targets: &[usize],
+    norm: &Normalization,
+) {
+    let (n, m, s) = (batch.contexts, batch.targets, batch.image_size);
+    let px = 3 * s * s;
+    let times = seq.times();
+    for (i, &k) in contexts.iter().enumerate() {
+        let slot = b * n + i;
+        planar(
+            seq.frame(k),
+            s,
+            &mut batch.context_images[slot * px..(slot + 1) * px],
+        );
+        batch.context_joints[slot * JOINTS..(slot + 1) * JOINTS]
+            .copy_from_slice(&norm.normalize(&seq.joints[k]));
+        batch.context_times[slot] = times[k];
+        batch.context_mask[slot] = 1.0;
+    }
+    for (j, &k) in targets.iter().enumerate() {
+        let slot = b * m + j;
+        planar(
+            seq.frame(k),
+            s,
+            &mut batch.target_images[slot * px..(slot + 1) * px],
+        );
+        batch.target_joints[slot * JOINTS..(slot + 1) * JOINTS]
+            .copy_from_slice(&norm.normalize(&seq.joints[k]));
+        batch.target_times[slot] = times[k];
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+
+    fn seq(t: usize) -> Sequence {
+        Sequence {
+            image_size: 2,
+            joints: (0..t).map(|k| [k as f32; 7]).collect(),
+            endpoint: vec![[0.0; 7]; t],
+            object: vec![[0.0; 3]; t],
+            frames: (0..t * 12).map(|i| (i % 251) as u8).collect(),
+        }
+    }
+
+    #[test]
+    fn contexts_and_targets_are_distinct_steps_of_one_sequence() {
+        let pool = vec![seq(20), seq(30)];
+        let sampler = Sampler::new(SamplerConfig {
+            batch: 16,
+            max_contexts: 5,
+            targets: 4,
+        });
+        let mut rng = Pcg64::seed_from_u64(1);
+        let batch = sampler.sample(&pool, &Normalization::identity(), &mut rng);
+        assert_eq!(batch.context_images.len(), 16 * 5 * 12);
+        for b in 0..16 {
+            let mask = &batch.context_mask[b * 5..b * 5 + 5];
+            let n = mask.iter().filter(|&&v| v == 1.0).count();
+            assert!((1..=5).contains(&n));
+            assert!(
+                mask[..n].iter().all(|&v| v == 1.0),
+                "real contexts come first"
+            );
+            // Joint value k marks step k: contexts and targets must not overlap.
+            let ctx: Vec<f32> = (0..n)
+                .map(|i| batch.context_joints[(b * 5 + i) * 7])
+                .collect();
+            for j in 0..4 {
+                assert!(!ctx.contains(&batch.target_joints[(b * 4 + j) * 7]));
+            }
+            assert!((0.0..=1.0).contains(&batch.blend[b]));
+        }
+        let again = sampler.sample(
+            &pool,
+            &Normalization::identity(),
+            &mut Pcg64::seed_from_u64(1),
+        );
+        assert_eq!(batch, again, "deterministic for a seed");
+    }
+
+    #[test]
+    fn frames_are_channels_first_in_unit_range() {
+        let s = seq(3);
+        let batch = Sampler::prediction(&s, &[1], &[0, 2], 0.5, &Normalization::identity());
+        // Pixel 0 of frame 1 is bytes 12, 13, 14.
+        assert_eq!(batch.context_images[0], 12.0 / 255.0);
+        assert_eq!(batch.context_images[4], 13.0 / 255.0);
+        assert_eq!(batch.context_images[8], 14.0 / 255.0);
+        assert_eq!(batch.target_times, vec![0.0, 1.0]);
+        assert_eq!(batch.context_times, vec![0.5]);
+    }
+}

@@ -1,0 +1,163 @@
+//! `dmbn predict`: observe a few steps of a dataset sequence, predict all of it, write the
+//! figures and print the scores.
+use std::fs;
+use std::path::{Path, PathBuf};
+
+use clap::Args;
+use image::RgbImage;
+use serde::Serialize;
+
+use dmbn::data::{Dataset, Sequence, JOINTS};
+use dmbn::figure::{joint_plot, save_png, JointPlot};
+use dmbn::predict::{Observations, Predictor, Scores, SequencePrediction};
+
+use crate::cli::CliError;
+
+#[derive(Args)]
+pub struct PredictArgs {
+    /// Model file (written by `train`).
+    #[arg(long)]
+    model: PathBuf,
+    /// Dataset root in the DMBN layout.
+    #[arg(long)]
+    data: PathBuf,
+    /// Sequence to predict, as ID/ACTION (e.g. 3/grasp).
+    #[arg(long, value_parser = parse_sequence)]
+    sequence: (u32, String),
+    /// Observed steps (context), comma separated step indices.
+    #[arg(long, value_delimiter = ',', required = true)]
+    observe: Vec<usize>,
+    /// Blending coefficient c: 1 = images only, 0 = joints only, 0.5 = both.
+    #[arg(long, default_value_t = 0.5, value_parser = parse_blend)]
+    blend: f32,
+    /// Output folder (created if missing; files in it are replaced).
+    #[arg(long)]
+    out: PathBuf,
+}
+
+fn parse_sequence(s: &str) -> Result<(u32, String), String> {
+    let bad = || format!("{s:?} is not ID/ACTION: expected e.g. 3/grasp");
+    let (id, action) = s.split_once('/').ok_or_else(bad)?;
+    let id = id.parse().map_err(|_| bad())?;
+    if action.is_empty() {
+        return Err(bad());
+    }
+    Ok((id, action.to_string()))
+}
+
+fn parse_blend(s: &str) -> Result<f32, String> {
+    match s.parse::<f32>() {
+        Ok(c) if (0.0..=1.0).contains(&c) => Ok(c),
+        _ => Err(format!(
+            "{s:?} is not a blending coefficient: expected a number in [0, 1]"
+        )),
+    }
+}
+
+/// What `scores.json` holds.
+#[derive(Serialize)]
+struct Report<'a> {
+    model: String,
+    sequence: String,
+    observed: &'a [usize],
+    blend: f32,
+    steps: usize,
+    scores: Scores,
+}
+
+pub fn run(args: PredictArgs) -> Result<(), CliError> {
+    let predictor = Predictor::load(&args.model)?;
+    let dataset = Dataset::open(&args.data)?;
+    let (id, action) = &args.sequence;
+    let seq_ref = dataset.find(*id, action)?;
+    let size = predictor.model().image_size() as u32;
+    let seq = dataset.read(seq_ref, Some(size))?;
+    let observations = Observations::from_sequence(&seq, &args.observe)?;
+    let prediction = predictor.predict(&observations, &seq.times(), args.blend)?;
+    let scores = Scores::of(
+        &prediction,
+        &seq.frames,
+        &seq.joints,
+        predictor.normalization(),
+    )
+    .ok_or_else(|| CliError::Usage("prediction and sequence lengths differ".into()))?;
+
+    write_figures(&args, &seq, &prediction)?;
+    let report = Report {
+        model: predictor.model().kind().to_string(),
+        sequence: format!("{id}/{action}"),
+        observed: &args.observe,
+        blend: args.blend,
+        steps: seq.len(),
+        scores,
+    };
+    let json = serde_json::to_vec_pretty(&report).map_err(|e| CliError::Usage(e.to_string()))?;
+    write(&args.out.join("scores.json"), &json)?;
+    println!(
+        "{} on {id}/{action} ({} steps), observed {:?}, blend {}",
+        report.model,
+        seq.len(),
+        args.observe,
+        args.blend
+    );
+    println!(
+        "image: MSE {:.5}  NLL {:.4}\njoints: MSE {:.5}  NLL {:.4} (normalised units)",
+        scores.image_mse, scores.image_nll, scores.joint_mse, scores.joint_nll
+    );
+    println!("wrote {}", args.out.display());
+    Ok(())
+}
+
+fn write_figures(
+    args: &PredictArgs,
+    seq: &Sequence,
+    prediction: &SequencePrediction,
+) -> Result<(), CliError> {
+    let s = prediction.image_size as u32;
+    for dir in ["mean", "sigma", "truth"] {
+        let dir = args.out.join(dir);
+        fs::create_dir_all(&dir).map_err(|source| CliError::Io {
+            path: dir.clone(),
+            source,
+        })?;
+    }
+    let scale = prediction.max_image_sigma();
+    let frame = |bytes: Vec<u8>| {
+        RgbImage::from_raw(s, s, bytes).ok_or_else(|| CliError::Usage("frame size".into()))
+    };
+    for k in 0..prediction.len() {
+        let name = format!("{k}.png");
+        save_png(
+            &args.out.join("mean").join(&name),
+            &frame(prediction.mean_frame(k))?,
+        )?;
+        save_png(
+            &args.out.join("sigma").join(&name),
+            &frame(prediction.sigma_map(k, scale))?,
+        )?;
+        save_png(
+            &args.out.join("truth").join(&name),
+            &frame(seq.frame(k).to_vec())?,
+        )?;
+    }
+    let times = seq.times();
+    let observed: Vec<(f32, [f32; JOINTS])> = args
+        .observe
+        .iter()
+        .map(|&k| (times[k], seq.joints[k]))
+        .collect();
+    let plot = JointPlot {
+        times: &times,
+        truth: Some(&seq.joints),
+        mean: &prediction.joint_mean,
+        sigma: &prediction.joint_sigma,
+        observed: &observed,
+        names: JointPlot::NAMES,
+    };
+    save_png(&args.out.join("joints.png"), &joint_plot(&plot, 900, 900)?)?;
+    Ok(())
+}
+
+fn write(path: &Path, bytes: &[u8]) -> Result<(), CliError> {
+    Ok(dmbn::data::write_atomic(path, bytes)?)
+}

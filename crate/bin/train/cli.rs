@@ -1,0 +1,163 @@
+//! The `train` command line (native only).
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::{Parser, ValueEnum};
+use indicatif::{ProgressBar, ProgressStyle};
+
+use dmbn::model::ModelKind;
+use dmbn::train::{Schedule, TrainConfig, TrainError, Trainer};
+
+#[derive(Clone, Copy, ValueEnum)]
+enum Kind {
+    /// DMBN, time as an input channel (the original).
+    Dmbn,
+    /// DMBN-PTE, positional time encoding (the paper's fix).
+    Pte,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum ScheduleArg {
+    Constant,
+    Cosine,
+    Step,
+}
+
+/// Train DMBN or DMBN-PTE. Writes metrics.jsonl, checkpoint/ (every --checkpoint-every
+/// steps, atomically) and, at the end, model.dmbn into --out.
+#[derive(Parser)]
+#[command(name = "train", version)]
+struct Args {
+    /// Dataset root in the DMBN layout (ours or the original).
+    #[arg(long)]
+    data: PathBuf,
+    /// Which network.
+    #[arg(long, value_enum)]
+    model: Kind,
+    /// Output folder for metrics, checkpoints and the final model.
+    #[arg(long)]
+    out: PathBuf,
+    /// Optimiser steps in the whole run (with --resume: extends or keeps the run's).
+    #[arg(long)]
+    steps: Option<u64>,
+    /// Seed of the weights and of the batch sampling.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Sequences per batch.
+    #[arg(long, default_value_t = 8)]
+    batch: usize,
+    /// Largest number of contexts per sequence (each draws 1..=max).
+    #[arg(long, default_value_t = 5)]
+    max_contexts: usize,
+    /// Targets per sequence.
+    #[arg(long, default_value_t = 4)]
+    targets_per_sequence: usize,
+    /// Frame size the model works at (64 or 128; frames are resized when read).
+    #[arg(long, default_value_t = 64)]
+    image_size: usize,
+    /// Base learning rate (Adam).
+    #[arg(long, default_value_t = 1e-4)]
+    lr: f64,
+    /// Learning-rate schedule.
+    #[arg(long, value_enum, default_value = "constant")]
+    schedule: ScheduleArg,
+    /// Gradient clipping: largest global gradient norm.
+    #[arg(long, default_value_t = 1.0)]
+    clip_norm: f32,
+    /// Weight of the joint NLL in the loss (the original's 0.01).
+    #[arg(long, default_value_t = 0.01)]
+    joint_weight: f64,
+    /// Lower bound of every predicted σ.
+    #[arg(long, default_value_t = 0.01)]
+    sigma_floor: f64,
+    /// Fraction of sequence ids held out for validation.
+    #[arg(long, default_value_t = 0.1)]
+    val_fraction: f64,
+    /// Validate every this many steps.
+    #[arg(long, default_value_t = 200)]
+    val_every: u64,
+    /// Write a checkpoint every this many steps.
+    #[arg(long, default_value_t = 500)]
+    checkpoint_every: u64,
+    /// Continue the run in --out from its last checkpoint (same settings).
+    #[arg(long)]
+    resume: bool,
+    /// Store the final model's weights in f16.
+    #[arg(long)]
+    half: bool,
+}
+
+pub fn main() -> ExitCode {
+    let args = Args::parse();
+    match run(args) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn run(args: Args) -> Result<(), TrainError> {
+    let mut trainer = if args.resume {
+        Trainer::resume(&args.data, &args.out, args.steps)?
+    } else {
+        let steps = args.steps.ok_or_else(|| TrainError::Config {
+            field: "steps",
+            message: "missing: pass --steps N".into(),
+        })?;
+        let model = match args.model {
+            Kind::Dmbn => ModelKind::Dmbn,
+            Kind::Pte => ModelKind::Pte,
+        };
+        let mut config = TrainConfig::new(model, steps, args.seed);
+        config.batch = args.batch;
+        config.max_contexts = args.max_contexts;
+        config.targets_per_sequence = args.targets_per_sequence;
+        config.image_size = args.image_size;
+        config.lr = args.lr;
+        config.schedule = match args.schedule {
+            ScheduleArg::Constant => Schedule::Constant,
+            ScheduleArg::Cosine => Schedule::Cosine {
+                final_fraction: 0.05,
+            },
+            ScheduleArg::Step => Schedule::Step {
+                every: (steps / 3).max(1),
+                gamma: 0.3,
+            },
+        };
+        config.clip_norm = args.clip_norm;
+        config.joint_weight = args.joint_weight;
+        config.sigma_floor = args.sigma_floor;
+        config.val_fraction = args.val_fraction;
+        config.val_every = args.val_every;
+        config.checkpoint_every = args.checkpoint_every;
+        Trainer::new(&args.data, &args.out, config)?
+    };
+    let steps = trainer.config().steps;
+    let bar = ProgressBar::new(steps).with_position(trainer.step_count());
+    bar.set_style(
+        ProgressStyle::with_template(
+            "{bar:30} {pos}/{len} {msg} [{elapsed_precise} < {eta_precise}]",
+        )
+        .expect("valid template"),
+    );
+    eprintln!(
+        "training {} on {} (validation ids {:?}), output in {}",
+        trainer.config().model,
+        args.data.display(),
+        trainer.val_ids(),
+        args.out.display()
+    );
+    let path = trainer.run(args.half, |p| {
+        bar.set_position(p.step);
+        let val = p.val_loss.map_or("-".to_string(), |v| format!("{v:.4}"));
+        bar.set_message(format!(
+            "loss {:.4} val {val} {:.2} steps/s",
+            p.loss, p.steps_per_s
+        ));
+    })?;
+    bar.finish();
+    println!("wrote {}", path.display());
+    Ok(())
+}

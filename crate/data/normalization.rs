@@ -1,0 +1,100 @@
+use serde::{Deserialize, Serialize};
+
+use super::Sequence;
+
+/// Joint normalisation statistics of a dataset: the model sees `(joint - mean) / std` per
+/// column and predicts in that space. Saved in the model file, so predictions can be mapped
+/// back to radians (and gripper units) with the statistics the model was trained on.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Normalization {
+    /// Per-column mean of the 7 joint values (6 arm angles, gripper).
+    pub mean: [f32; 7],
+    /// Per-column standard deviation, strictly positive.
+    pub std: [f32; 7],
+}
+
+impl Default for Normalization {
+    fn default() -> Self {
+        Self::identity()
+    }
+}
+
+impl Normalization {
+    /// Standard deviations below this are replaced by 1 in [`Normalization::fit`] (a column
+    /// that never moves, such as the gripper of a move-only dataset).
+    pub const MIN_STD: f32 = 1e-6;
+
+    /// Mean 0 and standard deviation 1: joints are used as they are.
+    pub fn identity() -> Self {
+        Self {
+            mean: [0.0; 7],
+            std: [1.0; 7],
+        }
+    }
+
+    /// Column means and (population) standard deviations of joint rows. A column whose
+    /// standard deviation is below [`Normalization::MIN_STD`] gets 1, so it is only centred.
+    /// No rows gives the identity.
+    pub fn fit<'a>(rows: impl IntoIterator<Item = &'a [f32; 7]>) -> Self {
+        let mut count = 0.0f64;
+        let mut sum = [0.0f64; 7];
+        let mut sum_sq = [0.0f64; 7];
+        for row in rows {
+            count += 1.0;
+            for (j, &v) in row.iter().enumerate() {
+                sum[j] += v as f64;
+                sum_sq[j] += v as f64 * v as f64;
+            }
+        }
+        if count == 0.0 {
+            return Self::identity();
+        }
+        let mut out = Self::identity();
+        for j in 0..7 {
+            let mean = sum[j] / count;
+            let var = (sum_sq[j] / count - mean * mean).max(0.0);
+            out.mean[j] = mean as f32;
+            let std = var.sqrt() as f32;
+            out.std[j] = if std < Self::MIN_STD { 1.0 } else { std };
+        }
+        out
+    }
+
+    /// [`Normalization::fit`] over every step of `sequences`.
+    pub fn from_sequences<'a>(sequences: impl IntoIterator<Item = &'a Sequence>) -> Self {
+        Self::fit(sequences.into_iter().flat_map(|s| s.joints.iter()))
+    }
+
+    /// `(joints - mean) / std`, column by column.
+    pub fn normalize(&self, joints: &[f32; 7]) -> [f32; 7] {
+        std::array::from_fn(|j| (joints[j] - self.mean[j]) / self.std[j])
+    }
+
+    /// `joints * std + mean`: back from model space to joint units.
+    pub fn denormalize(&self, joints: &[f32; 7]) -> [f32; 7] {
+        std::array::from_fn(|j| joints[j] * self.std[j] + self.mean[j])
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fit_normalize_denormalize() {
+        let rows = [
+            [1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 0.0],
+            [3.0, 2.0, 5.0, 4.0, 5.0, 6.0, 0.0],
+        ];
+        let n = Normalization::fit(&rows);
+        assert_eq!(n.mean[0], 2.0);
+        assert_eq!(n.std[0], 1.0);
+        assert_eq!(n.std[1], 1.0, "constant column gets std 1");
+        assert_eq!(n.mean[1], 2.0);
+        let z = n.normalize(&rows[1]);
+        assert_eq!(z[0], 1.0);
+        assert_eq!(z[1], 0.0);
+        let back = n.denormalize(&z);
+        assert_eq!(back, rows[1]);
+    }
+}

@@ -1,0 +1,196 @@
+use std::sync::Once;
+
+use image::RgbImage;
+use plotters::prelude::*;
+use plotters::style::{register_font, FontStyle};
+
+use super::FigureError;
+use crate::data::JOINTS;
+
+static FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSansMono.ttf");
+static REGISTER: Once = Once::new();
+
+/// What a joint plot shows: one panel per joint over the phase `times`.
+#[derive(Debug, Clone, Copy)]
+pub struct JointPlot<'a> {
+    /// `T` phases of the predicted (and true) steps.
+    pub times: &'a [f32],
+    /// `T × 7` true joint values, if known.
+    pub truth: Option<&'a [[f32; JOINTS]]>,
+    /// `T × 7` predicted mean.
+    pub mean: &'a [f32],
+    /// `T × 7` predicted σ (the band is mean ± 2σ).
+    pub sigma: &'a [f32],
+    /// Observed steps: (phase, joints).
+    pub observed: &'a [(f32, [f32; JOINTS])],
+    /// Panel titles (7).
+    pub names: [&'a str; JOINTS],
+}
+
+impl JointPlot<'_> {
+    /// The conventional names: six arm angles (rad) and the gripper opening.
+    pub const NAMES: [&'static str; JOINTS] = [
+        "joint 1 (rad)",
+        "joint 2 (rad)",
+        "joint 3 (rad)",
+        "joint 4 (rad)",
+        "joint 5 (rad)",
+        "joint 6 (rad)",
+        "gripper",
+    ];
+}
+
+/// Draws `plot` as a `width × height` RGB image: a 4 × 2 grid of panels, each with the true
+/// curve (black), the predicted mean (blue) inside its ±2σ band (light blue) and the observed
+/// points (red).
+pub fn joint_plot(plot: &JointPlot, width: u32, height: u32) -> Result<RgbImage, FigureError> {
+    let t = plot.times.len();
+    for (what, len) in [("mean", plot.mean.len()), ("sigma", plot.sigma.len())] {
+        if len != t * JOINTS {
+            return Err(FigureError::Input {
+                what,
+                reason: format!("holds {len} values, expected {t} steps × {JOINTS}"),
+            });
+        }
+    }
+    if let Some(truth) = plot.truth {
+        if truth.len() != t {
+            return Err(FigureError::Input {
+                what: "truth",
+                reason: format!("holds {} steps, expected {t}", truth.len()),
+            });
+        }
+    }
+    REGISTER.call_once(|| {
+        // The font is compiled in and known to parse; a failure would only lose the text.
+        let _ = register_font("sans-serif", FontStyle::Normal, FONT);
+    });
+    let mut buffer = vec![255u8; width as usize * height as usize * 3];
+    draw(plot, &mut buffer, width, height).map_err(|e| FigureError::Draw(e.to_string()))?;
+    RgbImage::from_raw(width, height, buffer)
+        .ok_or_else(|| FigureError::Draw("plot buffer of the wrong size".into()))
+}
+
+fn draw(
+    plot: &JointPlot,
+    buffer: &mut [u8],
+    width: u32,
+    height: u32,
+) -> Result<(), Box<dyn std::error::Error>> {
+    let root = BitMapBackend::with_buffer(buffer, (width, height)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let band = RGBColor(160, 190, 235);
+    let mean_colour = RGBColor(31, 90, 180);
+    let x_end = plot.times.iter().copied().fold(1.0f32, f32::max);
+    for (j, area) in root.split_evenly((4, 2)).iter().enumerate().take(JOINTS) {
+        let value = |row: &[f32]| row[j];
+        let rows = |v: &'_ [f32]| -> Vec<f32> { v.chunks_exact(JOINTS).map(value).collect() };
+        let (mean, sigma) = (rows(plot.mean), rows(plot.sigma));
+        let truth: Vec<f32> = plot
+            .truth
+            .map_or_else(Vec::new, |rows| rows.iter().map(|r| r[j]).collect());
+        let observed: Vec<(f32, f32)> = plot.observed.iter().map(|(t, r)| (*t, r[j])).collect();
+        let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
+        let values = mean
+            .iter()
+            .zip(&sigma)
+            .flat_map(|(m, s)| [m - 2.0 * s, m + 2.0 * s])
+            .chain(truth.iter().copied())
+            .chain(observed.iter().map(|o| o.1));
+        for v in values.filter(|v| v.is_finite()) {
+            lo = lo.min(v);
+            hi = hi.max(v);
+        }
+        if lo.partial_cmp(&hi) != Some(std::cmp::Ordering::Less) {
+            let c = if lo.is_finite() { lo } else { 0.0 };
+            (lo, hi) = (c - 0.5, c + 0.5);
+        }
+        let pad = 0.05 * (hi - lo);
+        let mut chart = ChartBuilder::on(area)
+            .caption(plot.names[j], ("sans-serif", 14))
+            .margin(6)
+            .x_label_area_size(22)
+            .y_label_area_size(46)
+            .build_cartesian_2d(0f32..x_end, (lo - pad)..(hi + pad))?;
+        chart
+            .configure_mesh()
+            .x_labels(5)
+            .y_labels(4)
+            .label_style(("sans-serif", 11))
+            .light_line_style(WHITE)
+            .draw()?;
+        let mut outline: Vec<(f32, f32)> = plot
+            .times
+            .iter()
+            .zip(mean.iter().zip(&sigma))
+            .map(|(&t, (m, s))| (t, m + 2.0 * s))
+            .collect();
+        outline.extend(
+            plot.times
+                .iter()
+                .zip(mean.iter().zip(&sigma))
+                .rev()
+                .map(|(&t, (m, s))| (t, m - 2.0 * s)),
+        );
+        chart.draw_series(std::iter::once(Polygon::new(outline, band.filled())))?;
+        if !truth.is_empty() {
+            chart.draw_series(LineSeries::new(
+                plot.times.iter().copied().zip(truth.iter().copied()),
+                BLACK.stroke_width(1),
+            ))?;
+        }
+        chart.draw_series(LineSeries::new(
+            plot.times.iter().copied().zip(mean.iter().copied()),
+            mean_colour.stroke_width(2),
+        ))?;
+        chart.draw_series(observed.iter().map(|&p| Circle::new(p, 4, RED.filled())))?;
+    }
+    if let Some(legend) = root.split_evenly((4, 2)).last() {
+        let style = ("sans-serif", 13).into_font();
+        let lines = [
+            ("true", BLACK),
+            ("predicted mean", mean_colour),
+            ("mean ± 2σ", band),
+            ("observed", RED),
+        ];
+        for (i, (label, colour)) in lines.iter().enumerate() {
+            let y = 30 + 24 * i as i32;
+            legend.draw(&Rectangle::new([(30, y - 6), (60, y + 6)], colour.filled()))?;
+            legend.draw(&Text::new(*label, (70, y - 7), style.clone()))?;
+        }
+    }
+    root.present()?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn draws_and_rejects_bad_lengths() {
+        let times = [0.0, 0.5, 1.0];
+        let mean = [0.1f32; 21];
+        let sigma = [0.05f32; 21];
+        let truth = [[0.2f32; 7]; 3];
+        let plot = JointPlot {
+            times: &times,
+            truth: Some(&truth),
+            mean: &mean,
+            sigma: &sigma,
+            observed: &[(0.5, [0.2; 7])],
+            names: JointPlot::NAMES,
+        };
+        let image = joint_plot(&plot, 400, 300).unwrap();
+        assert_eq!(image.dimensions(), (400, 300));
+        assert!(
+            image.pixels().any(|p| p.0 == [255, 0, 0]),
+            "observed points are drawn"
+        );
+        let bad = JointPlot {
+            mean: &mean[..20],
+            ..plot
+        };
+        assert!(joint_plot(&bad, 400, 300).is_err());
+    }
+}

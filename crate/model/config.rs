@@ -1,0 +1,177 @@
+use burn::config::Config;
+use serde::{Deserialize, Serialize};
+
+use super::ModelError;
+
+/// Frame sizes the architecture is defined for.
+pub const IMAGE_SIZES: [usize; 2] = [64, 128];
+
+/// Which of the paper's two networks.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ModelKind {
+    /// The original DMBN, "time as channel": the context time is an input channel of both
+    /// encoders and the target time is concatenated to the representation.
+    Dmbn,
+    /// DMBN-PTE, "time as context" (positional time encoding): a shared projection P(t) is
+    /// added to every context encoding and subtracted from the representation per target.
+    Pte,
+}
+
+impl ModelKind {
+    /// Both kinds.
+    pub const ALL: [ModelKind; 2] = [ModelKind::Dmbn, ModelKind::Pte];
+
+    /// The name used in model files and on the command line: `dmbn` or `pte`.
+    pub fn name(self) -> &'static str {
+        match self {
+            ModelKind::Dmbn => "dmbn",
+            ModelKind::Pte => "pte",
+        }
+    }
+}
+
+impl std::fmt::Display for ModelKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for ModelKind {
+    type Err = ModelError;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s {
+            "dmbn" => Ok(ModelKind::Dmbn),
+            "pte" | "dmbn-pte" => Ok(ModelKind::Pte),
+            _ => Err(ModelError::config(
+                "kind",
+                format!("is {s:?}: expected \"dmbn\" or \"pte\""),
+            )),
+        }
+    }
+}
+
+/// Everything that defines a model besides its weights; saved in the model file's header.
+#[derive(Config, Debug, PartialEq)]
+pub struct ModelConfig {
+    /// Which network: DMBN or DMBN-PTE.
+    pub kind: ModelKind,
+    /// Frame width and height: 64 or 128.
+    #[config(default = 64)]
+    pub image_size: usize,
+    /// Size of the context encodings and of the representation (H).
+    #[config(default = 128)]
+    pub hidden: usize,
+    /// Lower bound of every predicted σ: σ = floor + (1 − floor)·softplus(raw), in [0, 1).
+    #[config(default = 0.01)]
+    pub sigma_floor: f64,
+    /// Weight of the joint NLL in the total loss (the image NLL has weight 1).
+    #[config(default = 0.01)]
+    pub joint_weight: f64,
+}
+
+impl ModelConfig {
+    /// Checks every field: a supported image size, a non-zero hidden size, a σ floor in
+    /// [0, 1) and a finite, non-negative joint weight.
+    pub fn validate(&self) -> Result<(), ModelError> {
+        encoder_filters(self.image_size)?;
+        if self.hidden == 0 {
+            return Err(ModelError::config("hidden", "is 0: expected at least 1"));
+        }
+        if !(0.0..1.0).contains(&self.sigma_floor) {
+            return Err(ModelError::config(
+                "sigma_floor",
+                format!("is {}: expected a value in [0, 1)", self.sigma_floor),
+            ));
+        }
+        if !(self.joint_weight.is_finite() && self.joint_weight >= 0.0) {
+            return Err(ModelError::config(
+                "joint_weight",
+                format!("is {}: expected a finite value >= 0", self.joint_weight),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Filters of the image encoder's conv blocks for frames of `image_size` (the original
+/// DMBN's: every block halves the frame, down to 2x2).
+pub fn encoder_filters(image_size: usize) -> Result<Vec<usize>, ModelError> {
+    match image_size {
+        128 => Ok(vec![32, 64, 64, 128, 128, 256]),
+        64 => Ok(vec![32, 64, 128, 128, 256]),
+        _ => Err(image_size_error(image_size)),
+    }
+}
+
+/// Filters of the image decoder's upsampling blocks for frames of `image_size` (every block
+/// doubles the frame, from 2x2).
+pub fn decoder_filters(image_size: usize) -> Result<Vec<usize>, ModelError> {
+    match image_size {
+        128 => Ok(vec![256, 128, 128, 64, 64, 32]),
+        64 => Ok(vec![256, 128, 64, 64, 32]),
+        _ => Err(image_size_error(image_size)),
+    }
+}
+
+fn image_size_error(image_size: usize) -> ModelError {
+    ModelError::config(
+        "image_size",
+        format!("is {image_size}: expected one of {IMAGE_SIZES:?}"),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_and_json_round_trip() {
+        let config = ModelConfig::new(ModelKind::Pte);
+        assert_eq!(config.image_size, 64);
+        assert_eq!(config.hidden, 128);
+        assert_eq!(config.sigma_floor, 0.01);
+        assert_eq!(config.joint_weight, 0.01);
+        let json = serde_json::to_string(&config).unwrap();
+        assert!(json.contains("\"kind\":\"pte\""), "{json}");
+        let back: ModelConfig = serde_json::from_str(&json).unwrap();
+        assert_eq!(back, config);
+    }
+
+    #[test]
+    fn bad_fields_are_named() {
+        let err = ModelConfig::new(ModelKind::Dmbn)
+            .with_image_size(96)
+            .validate()
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("image_size") && err.contains("96"), "{err}");
+        let err = ModelConfig::new(ModelKind::Dmbn)
+            .with_sigma_floor(1.0)
+            .validate()
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("sigma_floor"), "{err}");
+        assert!(ModelConfig::new(ModelKind::Dmbn)
+            .with_joint_weight(f64::NAN)
+            .validate()
+            .is_err());
+        assert!(ModelConfig::new(ModelKind::Dmbn)
+            .with_hidden(0)
+            .validate()
+            .is_err());
+        assert!("pte".parse::<ModelKind>().is_ok());
+        assert!("cnp".parse::<ModelKind>().is_err());
+    }
+
+    #[test]
+    fn filters_reach_two_pixels() {
+        for size in IMAGE_SIZES {
+            let enc = encoder_filters(size).unwrap();
+            let dec = decoder_filters(size).unwrap();
+            assert_eq!(size >> enc.len(), 2);
+            assert_eq!(2 << dec.len(), size);
+        }
+    }
+}

@@ -1,0 +1,70 @@
+use burn::config::Config;
+use burn::module::Module;
+use burn::nn::{Linear, LinearConfig};
+use burn::tensor::activation::relu;
+use burn::tensor::{Device, Tensor};
+
+use super::image_decoder::{ImageDecoder, ImageDecoderConfig};
+use super::joint_decoder::{JointDecoder, JointDecoderConfig};
+use super::Prediction;
+
+/// Configuration of a [`Decoder`].
+#[derive(Config, Debug)]
+pub struct DecoderConfig {
+    /// Decoder input per target: H + 1 for DMBN (r and the target time), H for DMBN-PTE.
+    pub input: usize,
+    /// Width of the shared layer both modality decoders read.
+    #[config(default = 1024)]
+    pub shared: usize,
+    /// Filters of the image decoder's upsampling blocks.
+    pub image_filters: Vec<usize>,
+    /// Lower bound of every predicted σ.
+    #[config(default = 0.01)]
+    pub sigma_floor: f64,
+}
+
+/// Both decoders behind their shared Dense 1024 + ReLU layer: one target's conditioned
+/// representation to a Gaussian over its frame and its joints.
+#[derive(Module, Debug)]
+pub struct Decoder {
+    /// The shared dense layer.
+    pub shared: Linear,
+    /// Frame mean and σ.
+    pub image: ImageDecoder,
+    /// Joint mean and σ.
+    pub joint: JointDecoder,
+}
+
+impl DecoderConfig {
+    /// Builds the decoder.
+    pub fn init(&self, device: &Device) -> Decoder {
+        Decoder {
+            shared: LinearConfig::new(self.input, self.shared).init(device),
+            image: ImageDecoderConfig::new(self.image_filters.clone())
+                .with_input(self.shared)
+                .with_sigma_floor(self.sigma_floor)
+                .init(device),
+            joint: JointDecoderConfig::new()
+                .with_input(self.shared)
+                .with_sigma_floor(self.sigma_floor)
+                .init(device),
+        }
+    }
+}
+
+impl Decoder {
+    /// `[B, M, input]` conditioned representations to the prediction for every target.
+    pub fn forward(&self, x: Tensor<3>) -> Prediction {
+        let [b, m, input] = x.dims();
+        let x = relu(self.shared.forward(x.reshape([b * m, input])));
+        let (image_mean, image_sigma) = self.image.forward(x.clone());
+        let (joint_mean, joint_sigma) = self.joint.forward(x);
+        let [_, c, h, w] = image_mean.dims();
+        Prediction {
+            image_mean: image_mean.reshape([b, m, c, h, w]),
+            image_sigma: image_sigma.reshape([b, m, c, h, w]),
+            joint_mean: joint_mean.reshape([b, m, 7]),
+            joint_sigma: joint_sigma.reshape([b, m, 7]),
+        }
+    }
+}

@@ -1,0 +1,109 @@
+use burn::config::Config;
+use burn::module::Module;
+use burn::tensor::{Device, Tensor};
+
+use super::aggregation::{blend, masked_mean};
+use super::config::{decoder_filters, encoder_filters};
+use super::decoder::{Decoder, DecoderConfig};
+use super::image_encoder::{ImageEncoder, ImageEncoderConfig};
+use super::joint_encoder::{JointEncoder, JointEncoderConfig};
+use super::{BatchTensors, ContextEncodings, ModelError, Prediction, Representation};
+
+/// Configuration of a [`Dmbn`].
+#[derive(Config, Debug)]
+pub struct DmbnConfig {
+    /// Frame width and height: 64 or 128.
+    #[config(default = 64)]
+    pub image_size: usize,
+    /// Size of the context encodings and of the representation (H).
+    #[config(default = 128)]
+    pub hidden: usize,
+    /// Lower bound of every predicted σ.
+    #[config(default = 0.01)]
+    pub sigma_floor: f64,
+}
+
+/// The original Deep Modality Blending Network, "time as channel" (the paper's §3.1):
+///
+/// - image encoder on `[t plane, R, G, B]` per context, joint encoder on `(t, 7 joints)`;
+/// - masked mean over contexts per modality, blend r = c·r_image + (1 − c)·r_joint;
+/// - per target, `[r, t_target]` (H + 1 values) into the shared decoder layer and both
+///   decoders.
+#[derive(Module, Debug)]
+pub struct Dmbn {
+    /// e_image, on 4 channels.
+    pub image_encoder: ImageEncoder,
+    /// e_joint, on 8 values.
+    pub joint_encoder: JointEncoder,
+    /// Shared layer, image and joint decoders.
+    pub decoder: Decoder,
+}
+
+impl DmbnConfig {
+    /// Builds the network; fails on an unsupported image size.
+    pub fn init(&self, device: &Device) -> Result<Dmbn, ModelError> {
+        Ok(Dmbn {
+            image_encoder: ImageEncoderConfig::new(4, encoder_filters(self.image_size)?)
+                .with_hidden(self.hidden)
+                .init(device),
+            joint_encoder: JointEncoderConfig::new(8)
+                .with_hidden(self.hidden)
+                .init(device),
+            decoder: DecoderConfig::new(self.hidden + 1, decoder_filters(self.image_size)?)
+                .with_sigma_floor(self.sigma_floor)
+                .init(device),
+        })
+    }
+}
+
+impl Dmbn {
+    /// Every context slot's encoding per modality, `[B, N, H]` each (padding included).
+    pub fn encode_contexts(&self, batch: &BatchTensors) -> ContextEncodings {
+        let [b, n, c, s, _] = batch.context_images.dims();
+        let times = batch.context_times.clone();
+        let plane = times
+            .clone()
+            .reshape([b, n, 1, 1, 1])
+            .expand([b, n, 1, s, s]);
+        let images =
+            Tensor::cat(vec![plane, batch.context_images.clone()], 2).reshape([b * n, c + 1, s, s]);
+        let image = self.image_encoder.forward(images);
+        let [_, h] = image.dims();
+        let joints = Tensor::cat(
+            vec![times.unsqueeze_dim::<3>(2), batch.context_joints.clone()],
+            2,
+        );
+        ContextEncodings {
+            image: image.reshape([b, n, h]),
+            joint: self.joint_encoder.forward(joints),
+        }
+    }
+
+    /// The blended representation r, `[B, H]`.
+    pub fn encode(&self, batch: &BatchTensors) -> Representation {
+        let z = self.encode_contexts(batch);
+        let r_image = masked_mean(z.image, batch.context_mask.clone());
+        let r_joint = masked_mean(z.joint, batch.context_mask.clone());
+        Representation {
+            r: blend(r_image, r_joint, batch.blend.clone()),
+        }
+    }
+
+    /// The prediction at `[B, M]` target times, from `[B, H]` representations.
+    pub fn decode(&self, representation: &Representation, target_times: Tensor<2>) -> Prediction {
+        let [b, m] = target_times.dims();
+        let [_, h] = representation.r.dims();
+        let r = representation
+            .r
+            .clone()
+            .unsqueeze_dim::<3>(1)
+            .expand([b, m, h]);
+        let x = Tensor::cat(vec![r, target_times.unsqueeze_dim::<3>(2)], 2);
+        self.decoder.forward(x)
+    }
+
+    /// Encode the contexts and decode the batch's target times.
+    pub fn forward(&self, batch: &BatchTensors) -> Prediction {
+        self.decode(&self.encode(batch), batch.target_times.clone())
+    }
+}

@@ -1,0 +1,117 @@
+use burn::config::Config;
+use burn::module::Module;
+use burn::tensor::{Device, Tensor};
+
+use super::aggregation::{blend, masked_mean};
+use super::config::{decoder_filters, encoder_filters};
+use super::context_projection::{ContextProjection, ContextProjectionConfig};
+use super::decoder::{Decoder, DecoderConfig};
+use super::image_encoder::{ImageEncoder, ImageEncoderConfig};
+use super::joint_encoder::{JointEncoder, JointEncoderConfig};
+use super::time_projection::{TimeProjection, TimeProjectionConfig};
+use super::{BatchTensors, ContextEncodings, ModelError, Prediction, Representation};
+
+/// Configuration of a [`DmbnPte`].
+#[derive(Config, Debug)]
+pub struct DmbnPteConfig {
+    /// Frame width and height: 64 or 128.
+    #[config(default = 64)]
+    pub image_size: usize,
+    /// Size of the context encodings, of P(t) and of the representation (H).
+    #[config(default = 128)]
+    pub hidden: usize,
+    /// Lower bound of every predicted σ.
+    #[config(default = 0.01)]
+    pub sigma_floor: f64,
+}
+
+/// DMBN with Positional Time Encoding, "time as context" (the paper's §3.2):
+///
+/// - encoders see no time: the image encoder reads RGB, the joint encoder the 7 joints;
+/// - each context: z_m = g_m(e_m(x) + P(t)), with P a shared Linear 1 → H and g_m a
+///   per-modality Linear + LayerNorm + tanh ([`ContextProjection`]);
+/// - masked mean over contexts per modality, blend r = c·r_image + (1 − c)·r_joint;
+/// - per target, r − P(t_target) (H values, no time concatenated) into the decoders.
+#[derive(Module, Debug)]
+pub struct DmbnPte {
+    /// e_image, on 3 channels.
+    pub image_encoder: ImageEncoder,
+    /// e_joint, on 7 values.
+    pub joint_encoder: JointEncoder,
+    /// P(t), shared by contexts of both modalities and by targets.
+    pub time: TimeProjection,
+    /// g_image.
+    pub image_projection: ContextProjection,
+    /// g_joint.
+    pub joint_projection: ContextProjection,
+    /// Shared layer, image and joint decoders.
+    pub decoder: Decoder,
+}
+
+impl DmbnPteConfig {
+    /// Builds the network; fails on an unsupported image size.
+    pub fn init(&self, device: &Device) -> Result<DmbnPte, ModelError> {
+        let projection = ContextProjectionConfig::new().with_hidden(self.hidden);
+        Ok(DmbnPte {
+            image_encoder: ImageEncoderConfig::new(3, encoder_filters(self.image_size)?)
+                .with_hidden(self.hidden)
+                .init(device),
+            joint_encoder: JointEncoderConfig::new(7)
+                .with_hidden(self.hidden)
+                .init(device),
+            time: TimeProjectionConfig::new()
+                .with_hidden(self.hidden)
+                .init(device),
+            image_projection: projection.init(device),
+            joint_projection: projection.init(device),
+            decoder: DecoderConfig::new(self.hidden, decoder_filters(self.image_size)?)
+                .with_sigma_floor(self.sigma_floor)
+                .init(device),
+        })
+    }
+}
+
+impl DmbnPte {
+    /// Every context slot's z per modality, `[B, N, H]` each (padding included).
+    pub fn encode_contexts(&self, batch: &BatchTensors) -> ContextEncodings {
+        let [b, n, c, s, _] = batch.context_images.dims();
+        let images = batch.context_images.clone().reshape([b * n, c, s, s]);
+        let image = self.image_encoder.forward(images);
+        let [_, h] = image.dims();
+        let time = self.time.forward(batch.context_times.clone());
+        let joint = self.joint_encoder.forward(batch.context_joints.clone());
+        ContextEncodings {
+            image: self
+                .image_projection
+                .forward(image.reshape([b, n, h]) + time.clone()),
+            joint: self.joint_projection.forward(joint + time),
+        }
+    }
+
+    /// The blended representation r, `[B, H]`, before any target time is subtracted.
+    pub fn encode(&self, batch: &BatchTensors) -> Representation {
+        let z = self.encode_contexts(batch);
+        let r_image = masked_mean(z.image, batch.context_mask.clone());
+        let r_joint = masked_mean(z.joint, batch.context_mask.clone());
+        Representation {
+            r: blend(r_image, r_joint, batch.blend.clone()),
+        }
+    }
+
+    /// The prediction at `[B, M]` target times: r_target = r − P(t_target).
+    pub fn decode(&self, representation: &Representation, target_times: Tensor<2>) -> Prediction {
+        let [b, m] = target_times.dims();
+        let [_, h] = representation.r.dims();
+        let r = representation
+            .r
+            .clone()
+            .unsqueeze_dim::<3>(1)
+            .expand([b, m, h]);
+        self.decoder.forward(r - self.time.forward(target_times))
+    }
+
+    /// Encode the contexts and decode the batch's target times.
+    pub fn forward(&self, batch: &BatchTensors) -> Prediction {
+        self.decode(&self.encode(batch), batch.target_times.clone())
+    }
+}

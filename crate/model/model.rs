@@ -1,0 +1,167 @@
+use burn::module::Module;
+use burn::tensor::{Device, Tensor};
+
+use super::dmbn::{Dmbn, DmbnConfig};
+use super::dmbn_pte::{DmbnPte, DmbnPteConfig};
+use super::loss::{gaussian_loss, Loss};
+use super::{
+    BatchTensors, ContextEncodings, ModelConfig, ModelError, ModelKind, Prediction, Representation,
+};
+
+/// One of the two networks.
+// One value per model: the size difference between the variants costs nothing.
+#[allow(clippy::large_enum_variant)]
+#[derive(Module, Debug)]
+pub enum Network {
+    /// Time as channel.
+    Dmbn(Dmbn),
+    /// Positional time encoding.
+    Pte(DmbnPte),
+}
+
+/// A DMBN or DMBN-PTE with its [`ModelConfig`], so that training, evaluation and inference
+/// are written once for both. Its methods check their inputs against the config and return
+/// a [`ModelError`] instead of panicking.
+#[derive(Module, Debug)]
+pub struct Model {
+    /// The network's weights.
+    pub network: Network,
+    /// What built it (kind, sizes, σ floor, loss weight).
+    #[module(skip)]
+    config: ModelConfig,
+}
+
+impl ModelConfig {
+    /// Validates the config and builds a freshly initialised model on `device`.
+    pub fn init(&self, device: &Device) -> Result<Model, ModelError> {
+        self.validate()?;
+        let network = match self.kind {
+            ModelKind::Dmbn => Network::Dmbn(
+                DmbnConfig::new()
+                    .with_image_size(self.image_size)
+                    .with_hidden(self.hidden)
+                    .with_sigma_floor(self.sigma_floor)
+                    .init(device)?,
+            ),
+            ModelKind::Pte => Network::Pte(
+                DmbnPteConfig::new()
+                    .with_image_size(self.image_size)
+                    .with_hidden(self.hidden)
+                    .with_sigma_floor(self.sigma_floor)
+                    .init(device)?,
+            ),
+        };
+        Ok(Model {
+            network,
+            config: self.clone(),
+        })
+    }
+}
+
+impl Model {
+    /// The config the model was built from.
+    pub fn config(&self) -> &ModelConfig {
+        &self.config
+    }
+
+    /// DMBN or DMBN-PTE.
+    pub fn kind(&self) -> ModelKind {
+        self.config.kind
+    }
+
+    /// Frame width and height the model reads and predicts.
+    pub fn image_size(&self) -> usize {
+        self.config.image_size
+    }
+
+    /// Every context slot's encoding per modality, `[B, N, H]` each: the input of the
+    /// paper's time-regression probe.
+    pub fn encode_contexts(&self, batch: &BatchTensors) -> Result<ContextEncodings, ModelError> {
+        self.check(batch)?;
+        Ok(match &self.network {
+            Network::Dmbn(net) => net.encode_contexts(batch),
+            Network::Pte(net) => net.encode_contexts(batch),
+        })
+    }
+
+    /// The blended representation of each sequence's contexts, `[B, H]`; decode it at as
+    /// many target times as needed with [`Model::decode`].
+    pub fn encode(&self, batch: &BatchTensors) -> Result<Representation, ModelError> {
+        self.check(batch)?;
+        Ok(match &self.network {
+            Network::Dmbn(net) => net.encode(batch),
+            Network::Pte(net) => net.encode(batch),
+        })
+    }
+
+    /// The prediction at `[B, M]` target times (B as the representation, M >= 1).
+    pub fn decode(
+        &self,
+        representation: &Representation,
+        target_times: Tensor<2>,
+    ) -> Result<Prediction, ModelError> {
+        let [batch, _] = representation.r.dims();
+        let found = target_times.dims();
+        if found[0] != batch || found[1] == 0 {
+            return Err(ModelError::TargetTimes { batch, found });
+        }
+        Ok(match &self.network {
+            Network::Dmbn(net) => net.decode(representation, target_times),
+            Network::Pte(net) => net.decode(representation, target_times),
+        })
+    }
+
+    /// Encode the batch's contexts and decode its target times (training).
+    pub fn forward(&self, batch: &BatchTensors) -> Result<Prediction, ModelError> {
+        let representation = self.encode(batch)?;
+        self.decode(&representation, batch.target_times.clone())
+    }
+
+    /// The loss of a prediction made for `batch`, which must hold target frames and joints.
+    pub fn loss(&self, prediction: &Prediction, batch: &BatchTensors) -> Result<Loss, ModelError> {
+        let images = batch
+            .target_images
+            .clone()
+            .ok_or(ModelError::MissingTargets {
+                field: "target_images",
+            })?;
+        let joints = batch
+            .target_joints
+            .clone()
+            .ok_or(ModelError::MissingTargets {
+                field: "target_joints",
+            })?;
+        if images.dims() != prediction.image_mean.dims() {
+            return Err(ModelError::Length {
+                field: "target_images",
+                expected: prediction.image_mean.shape().num_elements(),
+                found: images.shape().num_elements(),
+                shape: format!("{:?}", prediction.image_mean.dims()),
+            });
+        }
+        if joints.dims() != prediction.joint_mean.dims() {
+            return Err(ModelError::Length {
+                field: "target_joints",
+                expected: prediction.joint_mean.shape().num_elements(),
+                found: joints.shape().num_elements(),
+                shape: format!("{:?}", prediction.joint_mean.dims()),
+            });
+        }
+        Ok(gaussian_loss(
+            prediction,
+            images,
+            joints,
+            self.config.joint_weight,
+        ))
+    }
+
+    fn check(&self, batch: &BatchTensors) -> Result<(), ModelError> {
+        if batch.image_size != self.config.image_size {
+            return Err(ModelError::ImageSize {
+                expected: self.config.image_size,
+                found: batch.image_size,
+            });
+        }
+        Ok(())
+    }
+}

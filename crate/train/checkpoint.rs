@@ -1,0 +1,90 @@
+use std::fs;
+use std::path::{Path, PathBuf};
+
+use rand_pcg::Pcg64;
+use serde::{Deserialize, Serialize};
+
+use crate::data::write_atomic;
+use crate::model::Normalization;
+
+use super::{TrainConfig, TrainError};
+
+/// Run state beside the weights: enough to continue exactly where the run stopped.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct CheckpointState {
+    /// Steps completed.
+    pub step: u64,
+    /// The batch sampler's random stream.
+    pub rng: Pcg64,
+    /// The run's settings (resuming keeps them).
+    pub config: TrainConfig,
+    /// Joint statistics of the training split.
+    pub normalization: Normalization,
+    /// Best validation loss so far, and its step.
+    pub best_val: Option<(u64, f32)>,
+}
+
+/// A checkpoint folder: `model.dmbn` (model file, f32), `optimizer.bpk` (Adam state),
+/// `state.json`. Written as `checkpoint.tmp/` and swapped in by renames, so a crash at any
+/// point leaves a complete checkpoint (`checkpoint/`, or `checkpoint.old/` mid-swap).
+pub struct Checkpoint;
+
+impl Checkpoint {
+    /// The checkpoint folder of a run's output folder.
+    pub fn dir(out: &Path) -> PathBuf {
+        out.join("checkpoint")
+    }
+
+    /// Write a checkpoint of `model_bytes` / `optimizer_bytes` / `state` under `out`.
+    pub fn write(
+        out: &Path,
+        model_bytes: &[u8],
+        optimizer_bytes: &[u8],
+        state: &CheckpointState,
+    ) -> Result<(), TrainError> {
+        let dir = Self::dir(out);
+        let tmp = out.join("checkpoint.tmp");
+        let old = out.join("checkpoint.old");
+        if tmp.exists() {
+            fs::remove_dir_all(&tmp).map_err(TrainError::io(&tmp))?;
+        }
+        fs::create_dir_all(&tmp).map_err(TrainError::io(&tmp))?;
+        write_atomic(&tmp.join("model.dmbn"), model_bytes)?;
+        write_atomic(&tmp.join("optimizer.bpk"), optimizer_bytes)?;
+        let json = serde_json::to_vec_pretty(state).expect("state serialises");
+        write_atomic(&tmp.join("state.json"), &json)?;
+        if dir.exists() {
+            if old.exists() {
+                fs::remove_dir_all(&old).map_err(TrainError::io(&old))?;
+            }
+            fs::rename(&dir, &old).map_err(TrainError::io(&dir))?;
+        }
+        fs::rename(&tmp, &dir).map_err(TrainError::io(&tmp))?;
+        if old.exists() {
+            fs::remove_dir_all(&old).map_err(TrainError::io(&old))?;
+        }
+        Ok(())
+    }
+
+    /// Read the newest complete checkpoint under `out`: (model bytes, optimizer bytes, state).
+    pub fn read(out: &Path) -> Result<(Vec<u8>, Vec<u8>, CheckpointState), TrainError> {
+        let mut dir = Self::dir(out);
+        if !dir.join("state.json").exists() {
+            dir = out.join("checkpoint.old");
+        }
+        let bad = |message: String| TrainError::Checkpoint {
+            path: dir.clone(),
+            message,
+        };
+        if !dir.join("state.json").exists() {
+            return Err(TrainError::Checkpoint {
+                path: Self::dir(out),
+                message: "no checkpoint to resume from (run without --resume first)".into(),
+            });
+        }
+        let read = |name: &str| fs::read(dir.join(name)).map_err(|e| bad(format!("{name}: {e}")));
+        let state: CheckpointState = serde_json::from_slice(&read("state.json")?)
+            .map_err(|e| bad(format!("state.json: {e}")))?;
+        Ok((read("model.dmbn")?, read("optimizer.bpk")?, state))
+    }
+}

@@ -1,0 +1,93 @@
+use serde::{Deserialize, Serialize};
+
+use crate::model::ModelKind;
+
+/// Learning-rate schedule over the run, a pure function of the step (so resuming needs no
+/// scheduler state).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "lowercase")]
+pub enum Schedule {
+    /// The base rate throughout.
+    Constant,
+    /// Cosine decay from the base rate to `final_fraction` of it at the last step.
+    Cosine { final_fraction: f64 },
+    /// Multiply by `gamma` every `every` steps.
+    Step { every: u64, gamma: f64 },
+}
+
+impl Schedule {
+    /// Learning rate at `step` (0-based) of `steps`, from the base rate `lr`.
+    pub fn rate(&self, lr: f64, step: u64, steps: u64) -> f64 {
+        match *self {
+            Schedule::Constant => lr,
+            Schedule::Cosine { final_fraction } => {
+                let progress = step as f64 / steps.max(1) as f64;
+                let floor = lr * final_fraction;
+                floor + 0.5 * (lr - floor) * (1.0 + (std::f64::consts::PI * progress).cos())
+            }
+            Schedule::Step { every, gamma } => lr * gamma.powi((step / every.max(1)) as i32),
+        }
+    }
+}
+
+/// Everything that defines a training run; saved with every checkpoint so `--resume`
+/// continues the same run.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TrainConfig {
+    /// DMBN or DMBN-PTE.
+    pub model: ModelKind,
+    /// Frame size the model works at (frames are resized to it when read).
+    pub image_size: usize,
+    /// Seed of the weights, the split-independent batch sampling and the blending draws.
+    pub seed: u64,
+    /// Optimiser steps in the whole run.
+    pub steps: u64,
+    /// Sequences per batch.
+    pub batch: usize,
+    /// Largest number of contexts per sequence (each draws 1..=max).
+    pub max_contexts: usize,
+    /// Targets per sequence.
+    pub targets_per_sequence: usize,
+    /// Base learning rate (Adam).
+    pub lr: f64,
+    /// Learning-rate schedule.
+    pub schedule: Schedule,
+    /// Gradient clipping by global norm.
+    pub clip_norm: f32,
+    /// Weight of the joint NLL in the loss.
+    pub joint_weight: f64,
+    /// Lower bound of the predicted σ.
+    pub sigma_floor: f64,
+    /// Fraction of sequence ids held out for validation.
+    pub val_fraction: f64,
+    /// Validate every this many steps.
+    pub val_every: u64,
+    /// Batches in the (fixed) validation set.
+    pub val_batches: usize,
+    /// Write a checkpoint every this many steps.
+    pub checkpoint_every: u64,
+}
+
+impl TrainConfig {
+    /// A run with the given model, seed and length and the defaults of the `train` binary.
+    pub fn new(model: ModelKind, steps: u64, seed: u64) -> TrainConfig {
+        TrainConfig {
+            model,
+            image_size: 64,
+            seed,
+            steps,
+            batch: 8,
+            max_contexts: 5,
+            targets_per_sequence: 4,
+            lr: 1e-4,
+            schedule: Schedule::Constant,
+            clip_norm: 1.0,
+            joint_weight: 0.01,
+            sigma_floor: 0.01,
+            val_fraction: 0.1,
+            val_every: 200,
+            val_batches: 8,
+            checkpoint_every: 500,
+        }
+    }
+}

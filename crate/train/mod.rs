@@ -1,0 +1,16 @@
+//! Training (native only): batched context/target sampling, Adam with gradient clipping and a
+//! learning-rate schedule, a held-out validation split, JSON-lines metrics, and atomic
+//! checkpoints that `--resume` continues exactly.
+mod checkpoint;
+mod config;
+mod error;
+mod metrics;
+mod split;
+mod trainer;
+
+pub use checkpoint::{Checkpoint, CheckpointState};
+pub use config::{Schedule, TrainConfig};
+pub use error::TrainError;
+pub use metrics::{Metrics, MetricsLog};
+pub use split::Split;
+pub use trainer::{Progress, Trainer};

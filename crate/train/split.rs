@@ -1,0 +1,55 @@
+use std::path::Path;
+
+use crate::data::{Dataset, Sequence};
+
+use super::TrainError;
+
+/// Training and validation sequences of a dataset, split by sequence id so both actions of
+/// one id land on the same side: the last `val_fraction` of the ids (at least one when there
+/// are two or more) are held out.
+pub struct Split {
+    pub train: Vec<Sequence>,
+    pub val: Vec<Sequence>,
+    /// Held-out ids.
+    pub val_ids: Vec<u32>,
+}
+
+impl Split {
+    /// Read every sequence of the dataset at `image_size` and split it.
+    pub fn load(root: &Path, image_size: usize, val_fraction: f64) -> Result<Split, TrainError> {
+        if !(0.0..1.0).contains(&val_fraction) {
+            return Err(TrainError::config(
+                "val_fraction",
+                format!("{val_fraction}: expected a value in [0, 1)"),
+            ));
+        }
+        let dataset = Dataset::open(root)?;
+        let ids = dataset.ids();
+        let held = if ids.len() < 2 {
+            0
+        } else {
+            ((ids.len() as f64 * val_fraction).ceil() as usize).max(1)
+        };
+        let val_ids = ids[ids.len() - held..].to_vec();
+        let (mut train, mut val) = (Vec::new(), Vec::new());
+        for seq_ref in dataset.sequences() {
+            let seq = dataset.read(seq_ref, Some(image_size as u32))?;
+            if val_ids.contains(&seq_ref.id) {
+                val.push(seq);
+            } else {
+                train.push(seq);
+            }
+        }
+        if train.is_empty() {
+            return Err(TrainError::config(
+                "data",
+                format!("{}: no training sequences", root.display()),
+            ));
+        }
+        Ok(Split {
+            train,
+            val,
+            val_ids,
+        })
+    }
+}

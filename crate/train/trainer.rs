@@ -1,0 +1,358 @@
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use burn::optim::grad_clipping::GradientClippingConfig;
+use burn::optim::{AdamConfig, GradientsParams, ModuleOptimizer};
+use burn::tensor::{Bytes, Device};
+use rand::SeedableRng;
+use rand_pcg::Pcg64;
+
+use crate::augment::{Batch, Sampler, SamplerConfig};
+use crate::model::{self, tensors, LossValues, Model, ModelConfig, Normalization};
+
+use super::{Checkpoint, CheckpointState, Metrics, MetricsLog, Split, TrainConfig, TrainError};
+
+/// Separate random streams: validation batches never shift the training stream.
+const VAL_STREAM: u64 = 0x5851_F42D_4C95_7F2D;
+
+/// What the progress display shows after each step.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Progress {
+    pub step: u64,
+    pub steps: u64,
+    pub loss: f32,
+    pub val_loss: Option<f32>,
+    pub steps_per_s: f64,
+}
+
+/// A training run: model, Adam, data and its random stream, checkpoints and metrics in `out`.
+pub struct Trainer {
+    config: TrainConfig,
+    out: PathBuf,
+    model: Model,
+    optim: ModuleOptimizer,
+    rng: Pcg64,
+    step: u64,
+    split: Split,
+    normalization: Normalization,
+    sampler: Sampler,
+    val_set: Vec<Batch>,
+    log: MetricsLog,
+    best_val: Option<(u64, f32)>,
+    device: Device,
+}
+
+impl Trainer {
+    /// A fresh run on the dataset at `data`, writing into `out` (which must hold no checkpoint:
+    /// continue such a run with [`Trainer::resume`]).
+    pub fn new(data: &Path, out: &Path, config: TrainConfig) -> Result<Trainer, TrainError> {
+        validate(&config)?;
+        if Checkpoint::read(out).is_ok() {
+            return Err(TrainError::config(
+                "out",
+                format!("{} already holds a checkpoint: pass --resume to continue it, or choose another --out", out.display()),
+            ));
+        }
+        std::fs::create_dir_all(out).map_err(TrainError::io(out))?;
+        let split = Split::load(data, config.image_size, config.val_fraction)?;
+        let normalization = Normalization::fit(split.train.iter().flat_map(|s| s.joints.iter()));
+        let device = training_device();
+        device.seed(config.seed);
+        let model = model_config(&config).init(&device)?;
+        let log = MetricsLog::open(&out.join("metrics.jsonl"), Some(0))?;
+        let rng = Pcg64::seed_from_u64(config.seed);
+        let optim = optimizer(&config);
+        Ok(Self::assemble(
+            config,
+            out,
+            model,
+            optim,
+            rng,
+            0,
+            split,
+            normalization,
+            log,
+            None,
+            device,
+        ))
+    }
+
+    /// Continue the run in `out` from its last checkpoint, with the same settings; `steps`
+    /// may extend the run.
+    pub fn resume(data: &Path, out: &Path, steps: Option<u64>) -> Result<Trainer, TrainError> {
+        let (model_bytes, optim_bytes, state) = Checkpoint::read(out)?;
+        let mut config = state.config;
+        if let Some(steps) = steps {
+            config.steps = steps;
+        }
+        validate(&config)?;
+        let split = Split::load(data, config.image_size, config.val_fraction)?;
+        let device = training_device();
+        let (model, _, _) = model::load_bytes(&model_bytes, &device)?;
+        let optim = optimizer(&config)
+            .from_bytes(Bytes::from_bytes_vec(optim_bytes))
+            .map_err(|e| TrainError::Checkpoint {
+                path: Checkpoint::dir(out),
+                message: format!("optimizer.bpk: {e:?}"),
+            })?;
+        let log = MetricsLog::open(&out.join("metrics.jsonl"), Some(state.step))?;
+        Ok(Self::assemble(
+            config,
+            out,
+            model,
+            optim,
+            state.rng,
+            state.step,
+            split,
+            state.normalization,
+            log,
+            state.best_val,
+            device,
+        ))
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn assemble(
+        config: TrainConfig,
+        out: &Path,
+        model: Model,
+        optim: ModuleOptimizer,
+        rng: Pcg64,
+        step: u64,
+        split: Split,
+        normalization: Normalization,
+        log: MetricsLog,
+        best_val: Option<(u64, f32)>,
+        device: Device,
+    ) -> Trainer {
+        let sampler = Sampler::new(SamplerConfig {
+            batch: config.batch,
+            max_contexts: config.max_contexts,
+            targets: config.targets_per_sequence,
+        });
+        let pool = if split.val.is_empty() {
+            &split.train
+        } else {
+            &split.val
+        };
+        let mut val_rng = Pcg64::seed_from_u64(config.seed ^ VAL_STREAM);
+        let val_set = (0..config.val_batches)
+            .map(|_| sampler.sample(pool, &normalization, &mut val_rng))
+            .collect();
+        Trainer {
+            config,
+            out: out.to_path_buf(),
+            model,
+            optim,
+            rng,
+            step,
+            split,
+            normalization,
+            sampler,
+            val_set,
+            log,
+            best_val,
+            device,
+        }
+    }
+
+    /// Steps completed.
+    pub fn step_count(&self) -> u64 {
+        self.step
+    }
+
+    /// The run's settings.
+    pub fn config(&self) -> &TrainConfig {
+        &self.config
+    }
+
+    /// Held-out sequence ids.
+    pub fn val_ids(&self) -> &[u32] {
+        &self.split.val_ids
+    }
+
+    /// One optimiser step on a fresh batch; a non-finite loss stops before touching the weights.
+    pub fn step(&mut self) -> Result<(LossValues, f64), TrainError> {
+        let batch = self
+            .sampler
+            .sample(&self.split.train, &self.normalization, &mut self.rng);
+        let batch = tensors(&batch, &self.device)?;
+        let prediction = self.model.forward(&batch)?;
+        let loss = self.model.loss(&prediction, &batch)?;
+        let values = loss.values();
+        if !values.total.is_finite() {
+            return Err(TrainError::NonFinite {
+                step: self.step + 1,
+                value: values.total,
+            });
+        }
+        let grads = GradientsParams::from_grads(loss.total.backward(), &self.model);
+        let lr = self
+            .config
+            .schedule
+            .rate(self.config.lr, self.step, self.config.steps);
+        self.model = self.optim.step(lr, self.model.clone(), grads);
+        self.step += 1;
+        Ok((values, lr))
+    }
+
+    /// Mean losses over the fixed validation batches.
+    pub fn validate(&self) -> Result<LossValues, TrainError> {
+        let mut sum = LossValues {
+            total: 0.0,
+            image_nll: 0.0,
+            joint_nll: 0.0,
+            image_mse: 0.0,
+            joint_mse: 0.0,
+        };
+        for batch in &self.val_set {
+            let batch = tensors(batch, &self.device)?;
+            let prediction = self.model.forward(&batch)?;
+            let v = self.model.loss(&prediction, &batch)?.values();
+            sum.total += v.total;
+            sum.image_nll += v.image_nll;
+            sum.joint_nll += v.joint_nll;
+            sum.image_mse += v.image_mse;
+            sum.joint_mse += v.joint_mse;
+        }
+        let n = self.val_set.len().max(1) as f32;
+        Ok(LossValues {
+            total: sum.total / n,
+            image_nll: sum.image_nll / n,
+            joint_nll: sum.joint_nll / n,
+            image_mse: sum.image_mse / n,
+            joint_mse: sum.joint_mse / n,
+        })
+    }
+
+    /// Train to `config.steps`, validating, logging and checkpointing on the way; writes the
+    /// final model to `out/model.dmbn` (f16 weights when `half`) and returns its path.
+    pub fn run(
+        &mut self,
+        half: bool,
+        mut on_progress: impl FnMut(&Progress),
+    ) -> Result<PathBuf, TrainError> {
+        let mut timer = (Instant::now(), self.step);
+        let mut last_val = None;
+        while self.step < self.config.steps {
+            let (values, lr) = self.step()?;
+            let step = self.step;
+            let elapsed = timer.0.elapsed().as_secs_f64();
+            let steps_per_s = (step - timer.1) as f64 / elapsed.max(1e-9);
+            let val = if step % self.config.val_every == 0 || step == self.config.steps {
+                let v = self.validate()?;
+                if self.best_val.is_none_or(|(_, best)| v.total < best) {
+                    self.best_val = Some((step, v.total));
+                }
+                last_val = Some(v.total);
+                Some(v)
+            } else {
+                None
+            };
+            self.log.write(&Metrics {
+                step,
+                lr,
+                loss: values.total,
+                image_nll: values.image_nll,
+                joint_nll: values.joint_nll,
+                image_mse: values.image_mse,
+                joint_mse: values.joint_mse,
+                val_loss: val.as_ref().map(|v| v.total),
+                val_image_mse: val.as_ref().map(|v| v.image_mse),
+                val_joint_mse: val.as_ref().map(|v| v.joint_mse),
+                steps_per_s,
+            })?;
+            if step % self.config.checkpoint_every == 0 || step == self.config.steps {
+                self.checkpoint()?;
+            }
+            on_progress(&Progress {
+                step,
+                steps: self.config.steps,
+                loss: values.total,
+                val_loss: last_val,
+                steps_per_s,
+            });
+            if elapsed > 5.0 {
+                timer = (Instant::now(), step);
+            }
+        }
+        let path = self.out.join("model.dmbn");
+        model::save(&path, &self.model, &self.normalization, half)?;
+        Ok(path)
+    }
+
+    /// Write a checkpoint of the current state.
+    pub fn checkpoint(&self) -> Result<(), TrainError> {
+        let model_bytes = model::save_bytes(&self.model, &self.normalization, false)?;
+        let optim_bytes = self
+            .optim
+            .into_bytes()
+            .map_err(|e| TrainError::Checkpoint {
+                path: Checkpoint::dir(&self.out),
+                message: format!("optimizer: {e:?}"),
+            })?;
+        let state = CheckpointState {
+            step: self.step,
+            rng: self.rng.clone(),
+            config: self.config.clone(),
+            normalization: self.normalization,
+            best_val: self.best_val,
+        };
+        Checkpoint::write(&self.out, &model_bytes, &optim_bytes, &state)
+    }
+}
+
+/// The training device: flex on the CPU, or the first CUDA GPU with the `cuda` feature.
+fn training_device() -> Device {
+    #[cfg(feature = "cuda")]
+    let device = Device::cuda(0);
+    #[cfg(not(feature = "cuda"))]
+    let device = Device::flex();
+    device.autodiff()
+}
+
+/// The model a run trains.
+fn model_config(config: &TrainConfig) -> ModelConfig {
+    ModelConfig::new(config.model)
+        .with_image_size(config.image_size)
+        .with_sigma_floor(config.sigma_floor)
+        .with_joint_weight(config.joint_weight)
+}
+
+/// Adam with gradient clipping by global norm.
+fn optimizer(config: &TrainConfig) -> ModuleOptimizer {
+    AdamConfig::new()
+        .with_grad_clipping(Some(GradientClippingConfig::Norm(config.clip_norm)))
+        .init()
+}
+
+/// Reject settings that would fail later or silently do nothing.
+fn validate(config: &TrainConfig) -> Result<(), TrainError> {
+    let positive = [
+        ("steps", config.steps),
+        ("batch", config.batch as u64),
+        ("max_contexts", config.max_contexts as u64),
+        ("targets_per_sequence", config.targets_per_sequence as u64),
+        ("val_every", config.val_every),
+        ("checkpoint_every", config.checkpoint_every),
+    ];
+    for (field, value) in positive {
+        if value == 0 {
+            return Err(TrainError::config(field, "is 0: expected at least 1"));
+        }
+    }
+    if !(config.lr.is_finite() && config.lr > 0.0) {
+        return Err(TrainError::config(
+            "lr",
+            format!("{}: expected a positive number", config.lr),
+        ));
+    }
+    if !(config.clip_norm.is_finite() && config.clip_norm > 0.0) {
+        return Err(TrainError::config(
+            "clip_norm",
+            format!("{}: expected a positive number", config.clip_norm),
+        ));
+    }
+    model_config(config).validate()?;
+    Ok(())
+}

@@ -1,0 +1,134 @@
+use wasm_bindgen::prelude::*;
+
+use crate::predict::{Observations, Predictor, SequencePrediction};
+
+/// A trained DMBN or DMBN-PTE for inference in the browser: `Model.fromBytes(bytes)`, then
+/// `predict(...)`. Wraps [`Predictor`], the same code the native `dmbn predict` runs.
+#[wasm_bindgen(js_name = Model)]
+pub struct ModelHandle {
+    inner: Predictor,
+}
+
+#[wasm_bindgen(js_class = Model)]
+impl ModelHandle {
+    /// Reads a model file (`Uint8Array`); throws on a truncated, corrupt or foreign file.
+    #[wasm_bindgen(js_name = fromBytes)]
+    pub fn from_bytes(bytes: &[u8]) -> Result<ModelHandle, JsError> {
+        Ok(ModelHandle {
+            inner: Predictor::from_bytes(bytes)?,
+        })
+    }
+
+    /// `"dmbn"` or `"pte"`.
+    #[wasm_bindgen(getter)]
+    pub fn kind(&self) -> String {
+        self.inner.model().kind().to_string()
+    }
+
+    /// Frame width and height the model reads and predicts.
+    #[wasm_bindgen(getter, js_name = imageSize)]
+    pub fn image_size(&self) -> usize {
+        self.inner.model().image_size()
+    }
+
+    /// Predicts `targetTimes` from N observed steps: `frames` a `Uint8Array(N × S × S × 3)`
+    /// (RGB, as `Episode.frames`), `joints` a `Float32Array(N × 7)` (radians, gripper),
+    /// `times` a `Float32Array(N)` of phases in [0, 1], `blend` in [0, 1] (1 = images only,
+    /// 0 = joints only). Throws on bad input.
+    pub fn predict(
+        &self,
+        frames: Vec<u8>,
+        joints: Vec<f32>,
+        times: Vec<f32>,
+        #[wasm_bindgen(js_name = targetTimes)] target_times: Vec<f32>,
+        blend: f32,
+    ) -> Result<Prediction, JsError> {
+        let observations = Observations {
+            image_size: self.image_size(),
+            frames,
+            joints,
+            times,
+        };
+        Ok(Prediction {
+            inner: self.inner.predict(&observations, &target_times, blend)?,
+        })
+    }
+}
+
+/// The predicted Gaussian at each target time, copied out as typed arrays.
+#[wasm_bindgen]
+pub struct Prediction {
+    inner: SequencePrediction,
+}
+
+impl Prediction {
+    /// The prediction, for Rust callers.
+    pub fn inner(&self) -> &SequencePrediction {
+        &self.inner
+    }
+
+    fn check(&self, k: usize) -> Result<(), JsError> {
+        if k < self.inner.len() {
+            Ok(())
+        } else {
+            Err(JsError::new(&format!(
+                "target index {k} is out of range: the prediction has {} targets",
+                self.inner.len()
+            )))
+        }
+    }
+}
+
+#[wasm_bindgen]
+impl Prediction {
+    /// Number of target times T.
+    #[wasm_bindgen(getter, js_name = len)]
+    pub fn steps(&self) -> usize {
+        self.inner.len()
+    }
+
+    /// Mean frames, `Float32Array(T × S × S × 3)`, RGB in [0, 1].
+    #[wasm_bindgen(js_name = imageMean)]
+    pub fn image_mean(&self) -> Vec<f32> {
+        self.inner.image_mean.clone()
+    }
+
+    /// σ of every pixel channel, `Float32Array(T × S × S × 3)`.
+    #[wasm_bindgen(js_name = imageSigma)]
+    pub fn image_sigma(&self) -> Vec<f32> {
+        self.inner.image_sigma.clone()
+    }
+
+    /// Mean joints, `Float32Array(T × 7)`, radians and gripper units.
+    #[wasm_bindgen(js_name = jointMean)]
+    pub fn joint_mean(&self) -> Vec<f32> {
+        self.inner.joint_mean.clone()
+    }
+
+    /// σ of every joint, `Float32Array(T × 7)`.
+    #[wasm_bindgen(js_name = jointSigma)]
+    pub fn joint_sigma(&self) -> Vec<f32> {
+        self.inner.joint_sigma.clone()
+    }
+
+    /// Mean frame `k` as RGB bytes, `Uint8Array(S × S × 3)`.
+    #[wasm_bindgen(js_name = meanFrame)]
+    pub fn mean_frame(&self, k: usize) -> Result<Vec<u8>, JsError> {
+        self.check(k)?;
+        Ok(self.inner.mean_frame(k))
+    }
+
+    /// σ of frame `k` as an RGB heat map, `Uint8Array(S × S × 3)`; `scale` is the σ shown as
+    /// full yellow (pass `maxImageSigma` to compare frames).
+    #[wasm_bindgen(js_name = sigmaMap)]
+    pub fn sigma_map(&self, k: usize, scale: f32) -> Result<Vec<u8>, JsError> {
+        self.check(k)?;
+        Ok(self.inner.sigma_map(k, scale))
+    }
+
+    /// The largest pixel σ of the prediction.
+    #[wasm_bindgen(getter, js_name = maxImageSigma)]
+    pub fn max_image_sigma(&self) -> f32 {
+        self.inner.max_image_sigma()
+    }
+}

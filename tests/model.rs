@@ -1,0 +1,580 @@
+//! DMBN and DMBN-PTE: output shapes, encode-once/decode-many, training on one tiny batch,
+//! the model file (round trips and every kind of bad file) and bad batches. Native only
+//! (training needs autodiff and an optimiser).
+#![cfg(not(target_arch = "wasm32"))]
+
+use burn::module::Module;
+use burn::optim::{AdamConfig, GradientsParams};
+use burn::tensor::{Device, Tensor, TensorData};
+use dmbn::augment::Batch;
+use dmbn::model::{
+    file, load_bytes, load_bytes_expecting, read_header, save_bytes, tensors, BatchTensors, Model,
+    ModelConfig, ModelError, ModelKind, Normalization, Prediction,
+};
+
+/// A small deterministic pseudo-random generator (values in [0, 1)).
+struct Lcg(u64);
+
+impl Lcg {
+    fn next(&mut self) -> f32 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((self.0 >> 40) as f32) / (1u64 << 24) as f32
+    }
+
+    fn fill(&mut self, len: usize, scale: f32, offset: f32) -> Vec<f32> {
+        (0..len).map(|_| self.next() * scale + offset).collect()
+    }
+}
+
+/// A batch with smooth-ish frames and joints; the last sequence (when B > 1) uses only its
+/// first context slot, the others are padding.
+fn batch(b: usize, n: usize, m: usize, s: usize, seed: u64) -> Batch {
+    let mut rng = Lcg(seed);
+    let mut context_mask = vec![1.0; b * n];
+    if b > 1 {
+        for slot in 1..n {
+            context_mask[(b - 1) * n + slot] = 0.0;
+        }
+    }
+    Batch {
+        batch: b,
+        contexts: n,
+        targets: m,
+        image_size: s,
+        context_images: rng.fill(b * n * 3 * s * s, 1.0, 0.0),
+        context_joints: rng.fill(b * n * 7, 2.0, -1.0),
+        context_times: rng.fill(b * n, 1.0, 0.0),
+        context_mask,
+        target_images: rng.fill(b * m * 3 * s * s, 1.0, 0.0),
+        target_joints: rng.fill(b * m * 7, 2.0, -1.0),
+        target_times: rng.fill(b * m, 1.0, 0.0),
+        blend: rng.fill(b, 1.0, 0.0),
+    }
+}
+
+fn device() -> Device {
+    Device::flex()
+}
+
+fn model(kind: ModelKind, image_size: usize, device: &Device) -> Model {
+    ModelConfig::new(kind)
+        .with_image_size(image_size)
+        .init(device)
+        .unwrap()
+}
+
+fn values<const D: usize>(t: &Tensor<D>) -> Vec<f32> {
+    t.to_data().convert::<f32>().try_to_vec().unwrap()
+}
+
+fn max_abs_diff<const D: usize>(a: &Tensor<D>, b: &Tensor<D>) -> f32 {
+    assert_eq!(a.dims(), b.dims());
+    values(a)
+        .iter()
+        .zip(values(b))
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f32::max)
+}
+
+fn prediction_diff(a: &Prediction, b: &Prediction) -> f32 {
+    [
+        max_abs_diff(&a.image_mean, &b.image_mean),
+        max_abs_diff(&a.image_sigma, &b.image_sigma),
+        max_abs_diff(&a.joint_mean, &b.joint_mean),
+        max_abs_diff(&a.joint_sigma, &b.joint_sigma),
+    ]
+    .into_iter()
+    .fold(0.0, f32::max)
+}
+
+#[test]
+fn output_shapes_for_both_models_and_sizes() {
+    let device = device();
+    for kind in ModelKind::ALL {
+        for (s, (b, n, m)) in [(64, (2, 3, 2)), (128, (1, 2, 1))] {
+            let model = model(kind, s, &device);
+            let t = tensors(&batch(b, n, m, s, 1), &device).unwrap();
+            let p = model.forward(&t).unwrap();
+            assert_eq!(p.image_mean.dims(), [b, m, 3, s, s], "{kind} {s}");
+            assert_eq!(p.image_sigma.dims(), [b, m, 3, s, s], "{kind} {s}");
+            assert_eq!(p.joint_mean.dims(), [b, m, 7], "{kind} {s}");
+            assert_eq!(p.joint_sigma.dims(), [b, m, 7], "{kind} {s}");
+            let z = model.encode_contexts(&t).unwrap();
+            assert_eq!(z.image.dims(), [b, n, 128]);
+            assert_eq!(z.joint.dims(), [b, n, 128]);
+            assert_eq!(model.encode(&t).unwrap().r.dims(), [b, 128]);
+            let mean = values(&p.image_mean);
+            assert!(mean.iter().all(|v| (0.0..=1.0).contains(v)), "{kind}");
+            for sigma in [values(&p.image_sigma), values(&p.joint_sigma)] {
+                assert!(sigma.iter().all(|&v| v > 0.01 && v.is_finite()), "{kind}");
+            }
+        }
+    }
+}
+
+#[test]
+fn encode_then_decode_equals_forward_and_targets_are_independent() {
+    let device = device();
+    for kind in ModelKind::ALL {
+        let model = model(kind, 64, &device);
+        let t = tensors(&batch(2, 3, 4, 64, 2), &device).unwrap();
+        let forward = model.forward(&t).unwrap();
+        let r = model.encode(&t).unwrap();
+        let decoded = model.decode(&r, t.target_times.clone()).unwrap();
+        assert_eq!(prediction_diff(&forward, &decoded), 0.0, "{kind}");
+        // Decoding targets 1..3 alone gives what decoding all four gave for them.
+        let part = model
+            .decode(&r, t.target_times.clone().slice([0..2, 1..3]))
+            .unwrap();
+        let whole = forward.joint_mean.clone().slice([0..2, 1..3]);
+        assert!(max_abs_diff(&part.joint_mean, &whole) < 1e-5, "{kind}");
+        let whole = forward.image_sigma.clone().slice([0..2, 1..3]);
+        assert!(max_abs_diff(&part.image_sigma, &whole) < 1e-5, "{kind}");
+    }
+}
+
+#[test]
+fn padding_slots_do_not_matter() {
+    let device = device();
+    for kind in ModelKind::ALL {
+        let model = model(kind, 64, &device);
+        let a = batch(2, 3, 1, 64, 3);
+        let mut b = a.clone();
+        // Change everything in the padding slots of sequence 1 (slots 1 and 2).
+        let frame = 3 * 64 * 64;
+        for slot in [4, 5] {
+            b.context_images[slot * frame..(slot + 1) * frame].fill(0.5);
+            b.context_joints[slot * 7..(slot + 1) * 7].fill(3.0);
+            b.context_times[slot] = 0.9;
+        }
+        let pa = model.forward(&tensors(&a, &device).unwrap()).unwrap();
+        let pb = model.forward(&tensors(&b, &device).unwrap()).unwrap();
+        assert!(prediction_diff(&pa, &pb) < 1e-6, "{kind}");
+    }
+}
+
+#[test]
+fn loss_is_finite_and_falls_when_overfitting_one_batch() {
+    let device = device().autodiff();
+    for kind in ModelKind::ALL {
+        let mut model = model(kind, 64, &device);
+        let t = tensors(&batch(1, 2, 2, 64, 4), &device).unwrap();
+        let mut optimizer = AdamConfig::new().init();
+        let mut first = None;
+        let mut last = f32::NAN;
+        for _ in 0..50 {
+            let prediction = model.forward(&t).unwrap();
+            let loss = model.loss(&prediction, &t).unwrap();
+            let v = loss.values();
+            assert!(v.total.is_finite() && v.image_nll.is_finite() && v.joint_nll.is_finite());
+            assert!((v.total - (v.image_nll + 0.01 * v.joint_nll)).abs() < 1e-4);
+            first.get_or_insert(v.total);
+            last = v.total;
+            let grads = GradientsParams::from_grads(loss.total.backward(), &model);
+            model = optimizer.step(3e-4, model, grads);
+        }
+        let first = first.unwrap();
+        eprintln!("{kind}: loss {first} -> {last}");
+        assert!(last < first - 0.2, "{kind}: loss {first} -> {last}");
+    }
+}
+
+fn saved(kind: ModelKind, half: bool) -> (Model, Vec<u8>, Normalization) {
+    let device = device();
+    let model = model(kind, 64, &device);
+    let mut normalization = Normalization::identity();
+    normalization.mean[0] = 0.5;
+    normalization.std[6] = 0.03;
+    let bytes = save_bytes(&model, &normalization, half).unwrap();
+    (model, bytes, normalization)
+}
+
+#[test]
+fn save_load_round_trip_exact_in_f32_and_close_in_f16() {
+    let device = device();
+    let t = tensors(&batch(2, 3, 2, 64, 5), &device).unwrap();
+    for kind in ModelKind::ALL {
+        let (model, bytes, normalization) = saved(kind, false);
+        let expected = model.forward(&t).unwrap();
+        let (loaded, norm, config) = load_bytes(&bytes, &device).unwrap();
+        assert_eq!(norm, normalization);
+        assert_eq!(&config, model.config());
+        assert_eq!(loaded.config(), model.config());
+        let p = loaded.forward(&t).unwrap();
+        assert_eq!(prediction_diff(&expected, &p), 0.0, "{kind} f32");
+
+        let (_, half, _) = {
+            let bytes = save_bytes(&model, &normalization, true).unwrap();
+            ((), bytes, ())
+        };
+        assert!(
+            half.len() < bytes.len() * 6 / 10,
+            "{} vs {}",
+            half.len(),
+            bytes.len()
+        );
+        let header = read_header(&half).unwrap();
+        assert_eq!(header.weights.dtype, file::WeightDType::F16);
+        let (loaded, _, _) = load_bytes(&half, &device).unwrap();
+        let p = loaded.forward(&t).unwrap();
+        let diff = prediction_diff(&expected, &p);
+        assert!(diff > 0.0 && diff < 0.02, "{kind} f16: {diff}");
+    }
+}
+
+#[test]
+fn save_and_load_a_file() {
+    let device = device();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("pte.dmbn");
+    let (model, _, normalization) = saved(ModelKind::Pte, false);
+    file::save(&path, &model, &normalization, false).unwrap();
+    // Overwriting works too, and leaves no temporary file behind.
+    file::save(&path, &model, &normalization, false).unwrap();
+    let names: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
+    assert_eq!(names.len(), 1);
+    let t = tensors(&batch(1, 2, 1, 64, 6), &device).unwrap();
+    let (loaded, norm, _) =
+        file::load_expecting(&path, &device, Some(ModelKind::Pte), Some(64)).unwrap();
+    assert_eq!(norm, normalization);
+    let diff = prediction_diff(&model.forward(&t).unwrap(), &loaded.forward(&t).unwrap());
+    assert_eq!(diff, 0.0);
+    let err = file::load(dir.path().join("missing.dmbn"), &device).unwrap_err();
+    assert!(matches!(err, ModelError::Io { .. }), "{err}");
+    assert!(err.to_string().contains("missing.dmbn"), "{err}");
+}
+
+/// Rebuilds a file from a header and a weight section (the checksum and length follow the
+/// weights unless the header says otherwise).
+fn assemble(header: &serde_json::Value, weights: &[u8]) -> Vec<u8> {
+    let header = serde_json::to_vec(header).unwrap();
+    let mut out = file::MAGIC.to_vec();
+    out.extend_from_slice(&file::FORMAT_VERSION.to_le_bytes());
+    out.extend_from_slice(&(header.len() as u32).to_le_bytes());
+    out.extend_from_slice(&header);
+    out.extend_from_slice(&(weights.len() as u64).to_le_bytes());
+    out.extend_from_slice(weights);
+    out
+}
+
+/// The header (as JSON) and the weight section of a file.
+fn parts(bytes: &[u8]) -> (serde_json::Value, Vec<u8>) {
+    let header_len = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    let header = serde_json::from_slice(&bytes[16..16 + header_len]).unwrap();
+    (header, bytes[24 + header_len..].to_vec())
+}
+
+fn load_err(bytes: &[u8]) -> ModelError {
+    match load_bytes(bytes, &device()) {
+        Ok(_) => panic!("a bad file loaded"),
+        Err(e) => e,
+    }
+}
+
+#[test]
+fn bad_files_give_clear_errors() {
+    let device = device();
+    let (_, bytes, _) = saved(ModelKind::Dmbn, false);
+    let header_len = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+
+    // Truncated at every section.
+    for (cut, what) in [
+        (3, "the magic bytes"),
+        (10, "the format version"),
+        (14, "the header length"),
+        (16 + header_len / 2, "the header"),
+        (16 + header_len + 3, "the weights length"),
+        (bytes.len() - 1, "the weights"),
+    ] {
+        match load_err(&bytes[..cut]) {
+            ModelError::Truncated { what: w, .. } => assert_eq!(w, what, "cut at {cut}"),
+            e => panic!("cut at {cut}: {e}"),
+        }
+    }
+    assert!(load_err(&bytes[..bytes.len() - 1])
+        .to_string()
+        .contains("truncated"));
+
+    // Not a model file: bad magic, random bytes, empty.
+    let mut bad = bytes.clone();
+    bad[0] = b'X';
+    assert!(matches!(load_err(&bad), ModelError::NotAModelFile));
+    let random = Lcg(9).fill(5000, 255.0, 0.0);
+    let random: Vec<u8> = random.into_iter().map(|v| v as u8).collect();
+    assert!(matches!(load_err(&random), ModelError::NotAModelFile));
+    assert!(matches!(load_err(&[]), ModelError::NotAModelFile));
+
+    // Unknown version.
+    let mut bad = bytes.clone();
+    bad[8..12].copy_from_slice(&2u32.to_le_bytes());
+    let err = load_err(&bad);
+    assert!(
+        matches!(
+            err,
+            ModelError::Version {
+                found: 2,
+                supported: 1
+            }
+        ),
+        "{err}"
+    );
+
+    // Bad header JSON.
+    let mut bad = bytes.clone();
+    bad[16] = b'#';
+    assert!(matches!(load_err(&bad), ModelError::Header(_)));
+
+    // Trailing bytes and corrupt weights.
+    let mut bad = bytes.clone();
+    bad.push(0);
+    assert!(matches!(
+        load_err(&bad),
+        ModelError::TrailingBytes { found: 1 }
+    ));
+    let mut bad = bytes.clone();
+    let last = bad.len() - 100;
+    bad[last] ^= 0xff;
+    assert!(matches!(load_err(&bad), ModelError::Checksum));
+
+    // Other kind or size than asked for.
+    let err = load_bytes_expecting(&bytes, &device, Some(ModelKind::Pte), None).unwrap_err();
+    assert!(matches!(err, ModelError::Kind { .. }), "{err}");
+    assert!(err.to_string().contains("dmbn") && err.to_string().contains("pte"));
+    let err = load_bytes_expecting(&bytes, &device, None, Some(128)).unwrap_err();
+    assert!(
+        matches!(
+            err,
+            ModelError::FileImageSize {
+                expected: 128,
+                found: 64
+            }
+        ),
+        "{err}"
+    );
+    assert!(load_bytes_expecting(&bytes, &device, Some(ModelKind::Dmbn), Some(64)).is_ok());
+
+    // A header whose config does not describe the weights: other hidden size, other kind,
+    // other image size.
+    let (header, weights) = parts(&bytes);
+    for (field, value) in [
+        ("hidden", serde_json::json!(64)),
+        ("kind", serde_json::json!("pte")),
+        ("image_size", serde_json::json!(128)),
+    ] {
+        let mut header = header.clone();
+        header["config"][field] = value;
+        let err = load_err(&assemble(&header, &weights));
+        assert!(matches!(err, ModelError::Weights(_)), "{field}: {err}");
+    }
+    // An invalid config or normalisation in the header.
+    let mut bad_header = header.clone();
+    bad_header["config"]["image_size"] = serde_json::json!(100);
+    let err = load_err(&assemble(&bad_header, &weights));
+    assert!(
+        matches!(
+            err,
+            ModelError::Config {
+                field: "image_size",
+                ..
+            }
+        ),
+        "{err}"
+    );
+    let mut bad_header = header.clone();
+    bad_header["normalization"]["std"][3] = serde_json::json!(0.0);
+    let err = load_err(&assemble(&bad_header, &weights));
+    assert!(
+        matches!(
+            err,
+            ModelError::Normalization {
+                field: "std",
+                index: 3,
+                ..
+            }
+        ),
+        "{err}"
+    );
+    let mut bad_header = header.clone();
+    bad_header["config"]["kind"] = serde_json::json!("cnp");
+    assert!(matches!(
+        load_err(&assemble(&bad_header, &weights)),
+        ModelError::Header(_)
+    ));
+    // The untouched parts reassemble into a good file.
+    assert!(load_bytes(&assemble(&header, &weights), &device).is_ok());
+}
+
+fn batch_err(batch: &Batch) -> ModelError {
+    match tensors(batch, &device()) {
+        Ok(_) => panic!("a bad batch was accepted"),
+        Err(e) => e,
+    }
+}
+
+#[test]
+fn bad_batches_give_clear_errors() {
+    let good = batch(2, 3, 2, 64, 7);
+    assert!(tensors(&good, &device()).is_ok());
+
+    let mut bad = good.clone();
+    bad.context_images.truncate(100);
+    let err = batch_err(&bad);
+    assert!(
+        matches!(
+            err,
+            ModelError::Length {
+                field: "context_images",
+                ..
+            }
+        ),
+        "{err}"
+    );
+    assert!(
+        err.to_string().contains("[B=2, N=3, 3, S=64, S=64]"),
+        "{err}"
+    );
+
+    // Frames of another size than stated.
+    let mut bad = good.clone();
+    bad.image_size = 128;
+    assert!(matches!(
+        batch_err(&bad),
+        ModelError::Length {
+            field: "context_images",
+            ..
+        }
+    ));
+    let mut bad = good.clone();
+    bad.target_joints.push(0.0);
+    assert!(matches!(
+        batch_err(&bad),
+        ModelError::Length {
+            field: "target_joints",
+            ..
+        }
+    ));
+    let mut bad = good.clone();
+    bad.blend.pop();
+    assert!(matches!(
+        batch_err(&bad),
+        ModelError::Length { field: "blend", .. }
+    ));
+
+    // A sequence with no context at all.
+    let mut bad = good.clone();
+    bad.context_mask[3..6].fill(0.0);
+    let err = batch_err(&bad);
+    assert!(
+        matches!(err, ModelError::EmptyContext { sequence: 1 }),
+        "{err}"
+    );
+    let mut bad = good.clone();
+    bad.context_mask[2] = 0.5;
+    assert!(matches!(
+        batch_err(&bad),
+        ModelError::MaskValue { index: 2, .. }
+    ));
+
+    // Blend outside [0, 1], non-finite values, zero sizes.
+    for value in [-0.1, 1.5, f32::NAN] {
+        let mut bad = good.clone();
+        bad.blend[1] = value;
+        let err = batch_err(&bad);
+        assert!(
+            matches!(
+                err,
+                ModelError::Blend { sequence: 1, .. }
+                    | ModelError::NotFinite { field: "blend", .. }
+            ),
+            "{err}"
+        );
+    }
+    let mut bad = good.clone();
+    bad.context_times[4] = f32::INFINITY;
+    assert!(matches!(
+        batch_err(&bad),
+        ModelError::NotFinite {
+            field: "context_times",
+            index: 4,
+            ..
+        }
+    ));
+    let mut bad = good.clone();
+    bad.targets = 0;
+    assert!(matches!(
+        batch_err(&bad),
+        ModelError::EmptyDimension { field: "targets" }
+    ));
+    assert!(matches!(
+        batch_err(&Batch::default()),
+        ModelError::EmptyDimension { field: "batch" }
+    ));
+
+    // Targets are optional (inference), but the loss needs them.
+    let device = device();
+    let mut inference = good.clone();
+    inference.target_images.clear();
+    inference.target_joints.clear();
+    let t = tensors(&inference, &device).unwrap();
+    let model = model(ModelKind::Pte, 64, &device);
+    let p = model.forward(&t).unwrap();
+    assert!(matches!(
+        model.loss(&p, &t),
+        Err(ModelError::MissingTargets {
+            field: "target_images"
+        })
+    ));
+
+    // A batch of 128 px frames for a 64 px model, and target times of the wrong shape.
+    let t128 = tensors(&batch(1, 1, 1, 128, 8), &device).unwrap();
+    assert!(matches!(
+        model.forward(&t128),
+        Err(ModelError::ImageSize {
+            expected: 64,
+            found: 128
+        })
+    ));
+    let r = model.encode(&t).unwrap();
+    let times = Tensor::<2>::from_data(TensorData::new(vec![0.5f32; 3], [3, 1]), &device);
+    assert!(matches!(
+        model.decode(&r, times),
+        Err(ModelError::TargetTimes {
+            batch: 2,
+            found: [3, 1]
+        })
+    ));
+}
+
+/// One forward + backward at B = 8, N = 5, M = 4, 64 px, per model (run with
+/// `cargo test --release --test model -- --ignored --nocapture`).
+#[test]
+#[ignore]
+fn timing_forward_backward() {
+    let device = device().autodiff();
+    for kind in ModelKind::ALL {
+        let model = model(kind, 64, &device);
+        let t: BatchTensors = tensors(&batch(8, 5, 4, 64, 10), &device).unwrap();
+        let mut times = Vec::new();
+        for _ in 0..4 {
+            let start = std::time::Instant::now();
+            let p = model.forward(&t).unwrap();
+            let loss = model.loss(&p, &t).unwrap();
+            let grads = loss.total.backward();
+            drop(grads);
+            times.push(start.elapsed().as_secs_f64());
+        }
+        let forward = {
+            let start = std::time::Instant::now();
+            let p = model
+                .valid()
+                .forward(&tensors(&batch(8, 5, 4, 64, 10), &Device::flex()).unwrap())
+                .unwrap();
+            let _ = values(&p.joint_mean);
+            start.elapsed().as_secs_f64()
+        };
+        println!("{kind}: forward+backward {times:.3?} s, inference forward {forward:.3} s");
+    }
+}

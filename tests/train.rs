@@ -1,0 +1,162 @@
+//! Training: the loss falls on a tiny generated dataset, `resume` reproduces the uninterrupted
+//! run exactly, a non-finite loss stops with a clear error and keeps the last checkpoint, and
+//! bad settings are refused.
+#![cfg(not(target_arch = "wasm32"))]
+
+use std::path::Path;
+
+use dmbn::data::DatasetWriter;
+use dmbn::model::ModelKind;
+use dmbn::predict::{Observations, Predictor};
+use dmbn::sim::{episode, Action};
+use dmbn::train::{Checkpoint, Metrics, TrainConfig, TrainError, Trainer};
+
+/// A dataset of `n` ids × both actions from the simulator.
+fn dataset(dir: &Path, n: u32) {
+    let mut writer = DatasetWriter::create(dir).unwrap();
+    for id in 0..n {
+        for action in Action::ALL {
+            writer
+                .write(
+                    id,
+                    action.name(),
+                    &episode(action, 500 + id as u64, 64).unwrap(),
+                )
+                .unwrap();
+        }
+    }
+    writer.finish().unwrap();
+}
+
+fn small(model: ModelKind, steps: u64) -> TrainConfig {
+    let mut c = TrainConfig::new(model, steps, 3);
+    c.batch = 2;
+    c.targets_per_sequence = 2;
+    c.max_contexts = 3;
+    c.val_batches = 1;
+    c.val_every = 2;
+    c.checkpoint_every = 2;
+    c
+}
+
+fn metrics(out: &Path) -> Vec<Metrics> {
+    std::fs::read_to_string(out.join("metrics.jsonl"))
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect()
+}
+
+#[test]
+fn loss_falls_when_overfitting_a_tiny_dataset() {
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("data");
+    dataset(&data, 1);
+    for model in ModelKind::ALL {
+        let out = tmp.path().join(model.name());
+        let mut config = small(model, 30);
+        config.lr = 3e-4;
+        config.val_fraction = 0.0;
+        config.val_every = 30;
+        config.checkpoint_every = 30;
+        let mut trainer = Trainer::new(&data, &out, config).unwrap();
+        let path = trainer.run(false, |_| {}).unwrap();
+        assert!(path.exists());
+        let m = metrics(&out);
+        assert_eq!(m.len(), 30);
+        let mean = |s: &[Metrics]| s.iter().map(|x| x.loss).sum::<f32>() / s.len() as f32;
+        let (first, last) = (mean(&m[..5]), mean(&m[25..]));
+        assert!(last < first - 0.05, "{model}: loss {first} -> {last}");
+    }
+}
+
+#[test]
+fn resume_reproduces_the_uninterrupted_run() {
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("data");
+    dataset(&data, 3);
+    let whole = tmp.path().join("whole");
+    Trainer::new(&data, &whole, small(ModelKind::Pte, 6))
+        .unwrap()
+        .run(false, |_| {})
+        .unwrap();
+
+    let parts = tmp.path().join("parts");
+    Trainer::new(&data, &parts, small(ModelKind::Pte, 4))
+        .unwrap()
+        .run(false, |_| {})
+        .unwrap();
+    let mut resumed = Trainer::resume(&data, &parts, Some(6)).unwrap();
+    assert_eq!(resumed.step_count(), 4);
+    resumed.run(false, |_| {}).unwrap();
+
+    let (a, b) = (metrics(&whole), metrics(&parts));
+    assert_eq!(a.len(), 6);
+    assert_eq!(b.len(), 6, "the resumed log reads as one run");
+    for (x, y) in a.iter().zip(&b) {
+        assert_eq!(
+            (x.step, x.loss, x.val_loss),
+            (y.step, y.loss, y.val_loss),
+            "step {}",
+            x.step
+        );
+    }
+    // Same final weights: identical predictions (the files may differ in parameter ids).
+    let seq = episode(Action::Grasp, 9, 64).unwrap();
+    let observations = Observations::from_sequence(&seq, &[0, 30]).unwrap();
+    let predict = |dir: &Path| {
+        Predictor::load(dir.join("model.dmbn"))
+            .unwrap()
+            .predict(&observations, &seq.times(), 0.5)
+            .unwrap()
+    };
+    assert_eq!(predict(&whole), predict(&parts), "same final weights");
+}
+
+#[test]
+fn non_finite_loss_stops_and_keeps_the_last_checkpoint() {
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("data");
+    dataset(&data, 2);
+    let out = tmp.path().join("out");
+    let mut config = small(ModelKind::Dmbn, 50);
+    config.lr = 1e30;
+    config.clip_norm = 1e30;
+    config.checkpoint_every = 1;
+    let mut trainer = Trainer::new(&data, &out, config).unwrap();
+    let err = trainer.run(false, |_| {}).unwrap_err();
+    let TrainError::NonFinite { step, .. } = err else {
+        panic!("expected a non-finite loss, got {err}")
+    };
+    assert!(err.to_string().contains("last good checkpoint"), "{err}");
+    let (_, _, state) = Checkpoint::read(&out).unwrap();
+    assert_eq!(
+        state.step,
+        step - 1,
+        "the checkpoint is the last finite step"
+    );
+    assert!(!out.join("model.dmbn").exists());
+}
+
+#[test]
+fn bad_settings_are_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("data");
+    dataset(&data, 1);
+    let out = tmp.path().join("out");
+    let mut config = small(ModelKind::Dmbn, 5);
+    config.batch = 0;
+    let err = Trainer::new(&data, &out, config).err().unwrap();
+    assert!(err.to_string().contains("batch"), "{err}");
+    let mut config = small(ModelKind::Dmbn, 5);
+    config.image_size = 100;
+    assert!(Trainer::new(&data, &out, config).is_err());
+    let err = Trainer::new(&tmp.path().join("missing"), &out, small(ModelKind::Dmbn, 5))
+        .err()
+        .unwrap();
+    assert!(err.to_string().contains("missing"), "{err}");
+    let err = Trainer::resume(&data, &tmp.path().join("nothing"), None)
+        .err()
+        .unwrap();
+    assert!(err.to_string().contains("no checkpoint"), "{err}");
+}
