@@ -2,6 +2,8 @@
 pub mod augment;
 pub mod data;
 #[cfg(not(target_arch = "wasm32"))]
+pub mod eval;
+#[cfg(not(target_arch = "wasm32"))]
 pub mod figure;
 pub mod model;
 pub mod predict;

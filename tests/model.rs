@@ -3,13 +3,12 @@
 //! (training needs autodiff and an optimiser).
 #![cfg(not(target_arch = "wasm32"))]
 
-use burn::module::Module;
 use burn::optim::{AdamConfig, GradientsParams};
 use burn::tensor::{Device, Tensor, TensorData};
 use dmbn::augment::Batch;
 use dmbn::model::{
-    file, load_bytes, load_bytes_expecting, read_header, save_bytes, tensors, BatchTensors, Model,
-    ModelConfig, ModelError, ModelKind, Normalization, Prediction,
+    file, load_bytes, load_bytes_expecting, read_header, save_bytes, tensors, Model, ModelConfig,
+    ModelError, ModelKind, Normalization, Prediction,
 };
 
 /// A small deterministic pseudo-random generator (values in [0, 1)).
@@ -546,35 +545,4 @@ fn bad_batches_give_clear_errors() {
             found: [3, 1]
         })
     ));
-}
-
-/// One forward + backward at B = 8, N = 5, M = 4, 64 px, per model (run with
-/// `cargo test --release --test model -- --ignored --nocapture`).
-#[test]
-#[ignore]
-fn timing_forward_backward() {
-    let device = device().autodiff();
-    for kind in ModelKind::ALL {
-        let model = model(kind, 64, &device);
-        let t: BatchTensors = tensors(&batch(8, 5, 4, 64, 10), &device).unwrap();
-        let mut times = Vec::new();
-        for _ in 0..4 {
-            let start = std::time::Instant::now();
-            let p = model.forward(&t).unwrap();
-            let loss = model.loss(&p, &t).unwrap();
-            let grads = loss.total.backward();
-            drop(grads);
-            times.push(start.elapsed().as_secs_f64());
-        }
-        let forward = {
-            let start = std::time::Instant::now();
-            let p = model
-                .valid()
-                .forward(&tensors(&batch(8, 5, 4, 64, 10), &Device::flex()).unwrap())
-                .unwrap();
-            let _ = values(&p.joint_mean);
-            start.elapsed().as_secs_f64()
-        };
-        println!("{kind}: forward+backward {times:.3?} s, inference forward {forward:.3} s");
-    }
 }

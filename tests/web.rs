@@ -3,8 +3,10 @@
 #![cfg(target_arch = "wasm32")]
 
 mod golden;
+#[path = "golden/prediction.rs"]
+mod golden_prediction;
 
-use dmbn::web::{placement_region, run_episode, Episode, Simulator};
+use dmbn::web::{placement_region, run_episode, Episode, ModelHandle, Prediction, Simulator};
 use wasm_bindgen::{JsError, JsValue};
 use wasm_bindgen_test::wasm_bindgen_test;
 
@@ -141,4 +143,120 @@ fn bad_arguments_throw() {
     let ep = grasp7();
     let err = message(ep.frame(ep.steps()).err().unwrap());
     assert!(err.contains("out of range"), "{err}");
+}
+
+/// The golden prediction's inputs as the page passes them: observed frames, joints and times.
+fn observed(ep: &Episode) -> (Vec<u8>, Vec<f32>, Vec<f32>) {
+    let n = 64 * 64 * 3;
+    let (frames, joints, times) = (ep.frames(), ep.joints(), ep.times());
+    let steps = golden_prediction::OBSERVE;
+    (
+        steps
+            .iter()
+            .flat_map(|&k| frames[k * n..(k + 1) * n].to_vec())
+            .collect(),
+        steps
+            .iter()
+            .flat_map(|&k| joints[k * 7..(k + 1) * 7].to_vec())
+            .collect(),
+        steps.iter().map(|&k| times[k]).collect(),
+    )
+}
+
+fn golden_prediction() -> (Episode, Prediction) {
+    let model = ModelHandle::from_bytes(golden_prediction::MODEL).expect("shipped weights load");
+    assert_eq!(model.kind(), "dmbn");
+    assert_eq!(model.image_size(), 64);
+    let ep = run_episode("grasp".into(), golden_prediction::SEED as f64, 64).unwrap();
+    let (frames, joints, times) = observed(&ep);
+    let prediction = model
+        .predict(frames, joints, times, ep.times(), golden_prediction::BLEND)
+        .expect("valid inputs");
+    (ep, prediction)
+}
+
+#[wasm_bindgen_test]
+fn prediction_matches_native_within_1e_4() {
+    let (ep, p) = golden_prediction();
+    assert_eq!(p.steps(), ep.steps());
+    let sample = golden_prediction::sample(p.inner());
+    let (diff, at) = golden_prediction::max_diff(&sample, &golden_prediction::expected());
+    assert!(
+        diff < 1e-4,
+        "wasm and native differ by {diff} at sample index {at}"
+    );
+}
+
+#[wasm_bindgen_test]
+fn prediction_arrays_have_sequence_shapes() {
+    let (ep, p) = golden_prediction();
+    let (t, px) = (ep.steps(), 64 * 64 * 3);
+    assert_eq!(p.image_mean().len(), t * px);
+    assert_eq!(p.image_sigma().len(), t * px);
+    assert_eq!(p.joint_mean().len(), t * 7);
+    assert_eq!(p.joint_sigma().len(), t * 7);
+    assert!(p.max_image_sigma() > 0.0);
+    assert_eq!(p.mean_frame(0).unwrap().len(), px);
+    assert_eq!(p.sigma_map(t - 1, p.max_image_sigma()).unwrap().len(), px);
+    assert!(message(p.mean_frame(t).err().unwrap()).contains("out of range"));
+}
+
+#[wasm_bindgen_test]
+fn bad_model_input_throws() {
+    let bytes = golden_prediction::MODEL;
+    let err = message(ModelHandle::from_bytes(&bytes[..1000]).err().unwrap());
+    assert!(err.contains("truncated"), "{err}");
+    let err = message(
+        ModelHandle::from_bytes(b"not a model at all")
+            .err()
+            .unwrap(),
+    );
+    assert!(err.contains("not a dmbn model file"), "{err}");
+
+    let model = ModelHandle::from_bytes(bytes).unwrap();
+    let ep = grasp7();
+    let (frames, joints, times) = observed(&ep);
+    let targets = vec![0.0, 0.5];
+    let err = message(
+        model
+            .predict(
+                frames[..100].to_vec(),
+                joints.clone(),
+                times.clone(),
+                targets.clone(),
+                0.5,
+            )
+            .err()
+            .unwrap(),
+    );
+    assert!(err.contains("frames"), "{err}");
+    let err = message(
+        model
+            .predict(vec![], vec![], vec![], targets.clone(), 0.5)
+            .err()
+            .unwrap(),
+    );
+    assert!(err.contains("at least one observed step"), "{err}");
+    let err = message(
+        model
+            .predict(frames, joints, times, targets, 1.5)
+            .err()
+            .unwrap(),
+    );
+    assert!(err.contains("blend"), "{err}");
+}
+
+#[wasm_bindgen_test]
+fn eval_sequences_t_p_f() {
+    let ep = grasp7();
+    let t = ep.eval_sequence("t", 0.0, None, None).unwrap();
+    assert_eq!((t.frames(), t.times()), (ep.frames(), ep.times()));
+    let p = ep.eval_sequence("p", 3.0, None, None).unwrap();
+    assert_eq!(p.frames(), ep.frames());
+    assert_ne!(p.times(), ep.times());
+    let f = ep.eval_sequence("f", 0.0, Some(10), Some(20)).unwrap();
+    let n = 64 * 64 * 3;
+    assert_eq!(f.frames()[15 * n..16 * n], ep.frames()[10 * n..11 * n]);
+    assert_eq!(f.times(), ep.times());
+    assert!(message(ep.eval_sequence("x", 0.0, None, None).err().unwrap()).contains("t, p or f"));
 }

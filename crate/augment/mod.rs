@@ -1,6 +1,12 @@
-//! From sequences to what the models consume: context/target sampling into [`Batch`]es.
+//! From sequences to what the models consume: context/target sampling into [`Batch`]es, the
+//! paper's time-warp augmentation ([`TimeWarpConfig`]) and its evaluation sequences
+//! ([`EvalSequence`]: t, p, f). Compiled for wasm too (the page shows p and f sequences).
 mod batch;
+mod eval_sequence;
 mod sampler;
+mod time_warp;
 
 pub use batch::{planar, Batch};
+pub use eval_sequence::{EvalMode, EvalSequence};
 pub use sampler::{Sampler, SamplerConfig};
+pub use time_warp::{gather, TimeWarpConfig};

@@ -4,11 +4,11 @@ use rand_pcg::Pcg64;
 
 use crate::data::{Normalization, Sequence, JOINTS};
 
-use super::{planar, Batch};
+use super::{planar, Batch, TimeWarpConfig};
 
 /// How training batches are drawn (the original drew one sequence, 1-5 contexts and one
 /// target per step; we batch several sequences and targets).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SamplerConfig {
     /// Sequences per batch (B).
     pub batch: usize,
@@ -16,6 +16,8 @@ pub struct SamplerConfig {
     pub max_contexts: usize,
     /// Targets per sequence (M), distinct from the contexts where the sequence allows.
     pub targets: usize,
+    /// Time-warp every drawn sequence first (the paper's augmentation), or not.
+    pub warp: Option<TimeWarpConfig>,
 }
 
 /// Draws context/target sets from sequences into [`Batch`]es. Both modalities are observed at
@@ -44,6 +46,8 @@ impl Sampler {
             picks[0].image_size as usize,
         );
         for (b, seq) in picks.into_iter().enumerate() {
+            let warped = cfg.warp.map(|warp| warp.apply(seq, rng));
+            let seq = warped.as_ref().unwrap_or(seq);
             let t = seq.len();
             let n = rng.random_range(1..=cfg.max_contexts.min(t.saturating_sub(1)).max(1));
             let steps = index::sample(rng, t, (n + cfg.targets).min(t)).into_vec();
@@ -158,6 +162,7 @@ mod tests {
             batch: 16,
             max_contexts: 5,
             targets: 4,
+            warp: None,
         });
         let mut rng = Pcg64::seed_from_u64(1);
         let batch = sampler.sample(&pool, &Normalization::identity(), &mut rng);

@@ -10,6 +10,14 @@ use crate::data::JOINTS;
 static FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSansMono.ttf");
 static REGISTER: Once = Once::new();
 
+/// Makes the embedded font the "sans-serif" of every figure (once).
+pub(crate) fn register() {
+    REGISTER.call_once(|| {
+        // The font is compiled in and known to parse; a failure would only lose the text.
+        let _ = register_font("sans-serif", FontStyle::Normal, FONT);
+    });
+}
+
 /// What a joint plot shows: one panel per joint over the phase `times`.
 #[derive(Debug, Clone, Copy)]
 pub struct JointPlot<'a> {
@@ -61,10 +69,7 @@ pub fn joint_plot(plot: &JointPlot, width: u32, height: u32) -> Result<RgbImage,
             });
         }
     }
-    REGISTER.call_once(|| {
-        // The font is compiled in and known to parse; a failure would only lose the text.
-        let _ = register_font("sans-serif", FontStyle::Normal, FONT);
-    });
+    register();
     let mut buffer = vec![255u8; width as usize * height as usize * 3];
     draw(plot, &mut buffer, width, height).map_err(|e| FigureError::Draw(e.to_string()))?;
     RgbImage::from_raw(width, height, buffer)

@@ -75,6 +75,12 @@ impl Predictor {
         observations: &Observations,
         blend: f32,
     ) -> Result<Representation, ModelError> {
+        if !(0.0..=1.0).contains(&blend) {
+            return Err(ModelError::observation(
+                "blend",
+                format!("is {blend}: expected a coefficient in [0, 1] (1 = images only, 0 = joints only)"),
+            ));
+        }
         observations.check(self.model.image_size())?;
         let batch = self.batch(observations, blend);
         self.model.encode(&tensors(&batch, &self.device)?)

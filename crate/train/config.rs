@@ -1,5 +1,6 @@
 use serde::{Deserialize, Serialize};
 
+use crate::augment::TimeWarpConfig;
 use crate::model::ModelKind;
 
 /// Learning-rate schedule over the run, a pure function of the step (so resuming needs no
@@ -66,6 +67,9 @@ pub struct TrainConfig {
     pub val_batches: usize,
     /// Write a checkpoint every this many steps.
     pub checkpoint_every: u64,
+    /// Time-warp augmentation of training sequences (the paper's, for DMBN-PTE), or none.
+    #[serde(default)]
+    pub augment: Option<TimeWarpConfig>,
 }
 
 impl TrainConfig {
@@ -88,6 +92,7 @@ impl TrainConfig {
             val_every: 200,
             val_batches: 8,
             checkpoint_every: 500,
+            augment: None,
         }
     }
 }

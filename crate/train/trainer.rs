@@ -125,10 +125,16 @@ impl Trainer {
         best_val: Option<(u64, f32)>,
         device: Device,
     ) -> Trainer {
-        let sampler = Sampler::new(SamplerConfig {
+        let plain = SamplerConfig {
             batch: config.batch,
             max_contexts: config.max_contexts,
             targets: config.targets_per_sequence,
+            warp: None,
+        };
+        // Training batches are warped with --augment; validation always sees plain sequences.
+        let sampler = Sampler::new(SamplerConfig {
+            warp: config.augment,
+            ..plain
         });
         let pool = if split.val.is_empty() {
             &split.train
@@ -137,7 +143,7 @@ impl Trainer {
         };
         let mut val_rng = Pcg64::seed_from_u64(config.seed ^ VAL_STREAM);
         let val_set = (0..config.val_batches)
-            .map(|_| sampler.sample(pool, &normalization, &mut val_rng))
+            .map(|_| Sampler::new(plain).sample(pool, &normalization, &mut val_rng))
             .collect();
         Trainer {
             config,
@@ -352,6 +358,10 @@ fn validate(config: &TrainConfig) -> Result<(), TrainError> {
             "clip_norm",
             format!("{}: expected a positive number", config.clip_norm),
         ));
+    }
+    if let Some(warp) = &config.augment {
+        warp.validate()
+            .map_err(|reason| TrainError::config("augment", reason))?;
     }
     model_config(config).validate()?;
     Ok(())

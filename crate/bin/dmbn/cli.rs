@@ -9,7 +9,7 @@ use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use thiserror::Error;
 
-use crate::predict;
+use crate::{eval, predict};
 use dmbn::data::{DataError, Dataset, DatasetWriter, Sequence, Summary};
 use dmbn::figure::FigureError;
 use dmbn::model::ModelError;
@@ -19,7 +19,7 @@ use dmbn::sim::{self, Action, SimError};
 #[command(
     name = "dmbn",
     version,
-    about = "DMBN datasets and models: simulate, inspect, predict"
+    about = "DMBN datasets and models: simulate, inspect, predict, eval, probe"
 )]
 struct Cli {
     #[command(subcommand)]
@@ -64,6 +64,16 @@ enum Command {
     /// sequence), truth/<k>.png, joints.png (true, predicted mean, ±2σ band, observed points)
     /// and scores.json; prints MSE and NLL of both modalities.
     Predict(predict::PredictArgs),
+    /// Reconstruct a t, p or f sequence from K observations (the paper's Figures 2-3).
+    ///
+    /// Writes figure.png (observed, generated with σ maps, targets, joint curves) and
+    /// eval.json; prints MSE and NLL over the sequence.
+    Eval(eval::EvalArgs),
+    /// The time-regression probe (the paper's Table 1): how well the context time can be read
+    /// back from each encoder's encodings, for Null, Random, DMBN and DMBN-PTE.
+    ///
+    /// Writes probe.md (the table) and probe.json (every seed's MSE).
+    Probe(eval::ProbeArgs),
 }
 
 /// Everything a command can fail with; printed as `error: <message>`.
@@ -85,6 +95,8 @@ pub(crate) enum CliError {
     Model(#[from] ModelError),
     #[error(transparent)]
     Figure(#[from] FigureError),
+    #[error(transparent)]
+    Train(#[from] dmbn::train::TrainError),
     #[error("{}: {source}", path.display())]
     Io {
         path: PathBuf,
@@ -125,6 +137,8 @@ pub fn main() -> ExitCode {
         }
         Command::Inspect { dir } => inspect(dir),
         Command::Predict(args) => predict::run(args),
+        Command::Eval(args) => eval::run_eval(args),
+        Command::Probe(args) => eval::run_probe(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

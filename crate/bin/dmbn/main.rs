@@ -1,8 +1,10 @@
-//! `dmbn`: generate datasets with the simulator and inspect datasets in the DMBN layout.
+//! `dmbn`: generate and inspect datasets in the DMBN layout, predict, evaluate and probe models.
 //! Thin on purpose: argument parsing and progress here, the work in the library. Native
 //! only: on wasm32 (where `wasm-pack test` also builds binaries) it is an empty program.
 #[cfg(not(target_arch = "wasm32"))]
 mod cli;
+#[cfg(not(target_arch = "wasm32"))]
+mod eval;
 #[cfg(not(target_arch = "wasm32"))]
 mod predict;
 

@@ -35,7 +35,7 @@ pub struct PredictArgs {
     out: PathBuf,
 }
 
-fn parse_sequence(s: &str) -> Result<(u32, String), String> {
+pub(crate) fn parse_sequence(s: &str) -> Result<(u32, String), String> {
     let bad = || format!("{s:?} is not ID/ACTION: expected e.g. 3/grasp");
     let (id, action) = s.split_once('/').ok_or_else(bad)?;
     let id = id.parse().map_err(|_| bad())?;
@@ -45,7 +45,7 @@ fn parse_sequence(s: &str) -> Result<(u32, String), String> {
     Ok((id, action.to_string()))
 }
 
-fn parse_blend(s: &str) -> Result<f32, String> {
+pub(crate) fn parse_blend(s: &str) -> Result<f32, String> {
     match s.parse::<f32>() {
         Ok(c) if (0.0..=1.0).contains(&c) => Ok(c),
         _ => Err(format!(

@@ -5,6 +5,7 @@ use std::process::ExitCode;
 use clap::{Parser, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 
+use dmbn::augment::TimeWarpConfig;
 use dmbn::model::ModelKind;
 use dmbn::train::{Schedule, TrainConfig, TrainError, Trainer};
 
@@ -82,6 +83,11 @@ struct Args {
     /// Continue the run in --out from its last checkpoint (same settings).
     #[arg(long)]
     resume: bool,
+    /// Time-warp augmentation (the paper's): random sections sped up or slowed down (0.5-2x)
+    /// and repeated frames inserted, in 80% of the training sequences.
+    #[arg(long)]
+    augment: bool,
+
     /// Store the final model's weights in f16.
     #[arg(long)]
     half: bool,
@@ -132,6 +138,7 @@ fn run(args: Args) -> Result<(), TrainError> {
         config.val_fraction = args.val_fraction;
         config.val_every = args.val_every;
         config.checkpoint_every = args.checkpoint_every;
+        config.augment = args.augment.then(TimeWarpConfig::default);
         Trainer::new(&args.data, &args.out, config)?
     };
     let steps = trainer.config().steps;

@@ -1,0 +1,44 @@
+#!/usr/bin/env bash
+# Model benchmarks side by side, on this machine, in one run:
+#   - burn native (flex):   cargo bench --bench model
+#   - PyTorch CPU:          bench/torch_dmbn.py (same DMBN, same shapes, same thread count)
+#   - burn wasm (node):     bench/model.mjs (simd128, shipped weights)
+# then prints the medians and the ratios the README quotes. Sets up a venv with torch in
+# $HOME/.cache/dmbn/venv on first use (pip; about 1-3 GB).
+#
+# Usage: bash bench/model.sh [THREADS]   (default: all cores)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+source .ci/setup
+threads="${1:-$(nproc)}"
+export RAYON_NUM_THREADS="$threads"
+
+venv="$HOME/.cache/dmbn/venv"
+if ! "$venv/bin/python" -c "import torch" 2>/dev/null; then
+  say "setting up $venv with torch (once)"
+  python3 -m venv "$venv"
+  "$venv/bin/pip" install --quiet torch numpy
+fi
+
+say "burn native (flex), $threads threads"
+native=$(cargo bench --bench model 2>/dev/null | tee /dev/stderr | sed -n 's/^json: //p')
+say "pytorch, $threads threads"
+torch=$("$venv/bin/python" bench/torch_dmbn.py --threads "$threads" | tee /dev/stderr)
+say "burn wasm (node, simd128)"
+wasm-pack build --release --target nodejs --out-dir pkg-node --no-typescript >/dev/null 2>&1
+wasm=$(node bench/model.mjs | tee /dev/stderr | sed -n 's/^json: //p')
+
+python3 - "$native" "$torch" "$wasm" <<'PY'
+import json, sys
+native = {r["model"]: r for r in json.loads(sys.argv[1])}
+torch = json.loads(sys.argv[2])
+wasm = {r["model"]: r for r in json.loads(sys.argv[3])}
+d = native["dmbn"]
+print("\nDMBN, 64x64 (medians, ms)        burn native   pytorch   ratio (torch/burn)")
+for key, label in [("train_step_ms", "train step 8x5x4"), ("infer_one_ms", "infer 1 target"), ("infer_sequence100_ms", "infer 100 steps")]:
+    print(f"{label:<32} {d[key]:>11.2f} {torch[key]:>9.2f} {torch[key] / d[key]:>8.2f}x")
+w = wasm["dmbn"]["infer_sequence100_ms"]
+print(f"wasm 100 steps {w:.1f} ms = {w / torch['infer_sequence100_ms']:.2f}x native pytorch, {w / d['infer_sequence100_ms']:.2f}x native burn")
+for kind in native:
+    print(f"{kind}: native {native[kind]['infer_sequence100_ms']:.1f} ms, wasm {wasm[kind]['infer_sequence100_ms']:.1f} ms per 100 steps")
+PY

@@ -1,0 +1,129 @@
+use rand::RngExt;
+use rand_pcg::Pcg64;
+use serde::{Deserialize, Serialize};
+
+use crate::data::Sequence;
+
+/// The paper's training augmentation (§3.2): change the speed of random sections of a
+/// sequence and insert repeated frames (freezes), so that a frame's content stops telling its
+/// time exactly. The warped sequence is a re-timing of the original: every step is one of the
+/// original steps, in non-decreasing order, and its time is its phase in the new sequence.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct TimeWarpConfig {
+    /// Probability that a sequence is warped at all.
+    pub probability: f64,
+    /// Number of sections whose speed changes, drawn uniformly from this range (inclusive).
+    pub sections: [usize; 2],
+    /// Length of each section as a fraction of the sequence, drawn uniformly.
+    pub section_fraction: [f64; 2],
+    /// Speed factor of each section (2 = twice as fast, half the frames), drawn log-uniformly.
+    pub speed: [f64; 2],
+    /// Probability of inserting a freeze (a step repeated).
+    pub freeze_probability: f64,
+    /// Extra copies of the frozen step, drawn uniformly from this range (inclusive).
+    pub freeze_length: [usize; 2],
+}
+
+impl Default for TimeWarpConfig {
+    fn default() -> Self {
+        TimeWarpConfig {
+            probability: 0.8,
+            sections: [1, 3],
+            section_fraction: [0.1, 0.4],
+            speed: [0.5, 2.0],
+            freeze_probability: 0.5,
+            freeze_length: [3, 15],
+        }
+    }
+}
+
+impl TimeWarpConfig {
+    /// Checks every range: ordered, probabilities in [0, 1], fractions in (0, 1], speeds > 0.
+    pub fn validate(&self) -> Result<(), String> {
+        let probability = |name: &str, p: f64| {
+            if (0.0..=1.0).contains(&p) {
+                Ok(())
+            } else {
+                Err(format!("{name} is {p}: expected a probability in [0, 1]"))
+            }
+        };
+        probability("probability", self.probability)?;
+        probability("freeze_probability", self.freeze_probability)?;
+        let ordered = |name: &str, lo: f64, hi: f64, min: f64| {
+            if lo.is_finite() && hi.is_finite() && min <= lo && lo <= hi {
+                Ok(())
+            } else {
+                Err(format!(
+                    "{name} is [{lo}, {hi}]: expected finite bounds, {min} <= low <= high"
+                ))
+            }
+        };
+        let [a, b] = self.sections;
+        ordered("sections", a as f64, b as f64, 0.0)?;
+        let [a, b] = self.section_fraction;
+        ordered("section_fraction", a, b, 0.0)?;
+        if b > 1.0 || a <= 0.0 {
+            return Err(format!(
+                "section_fraction is [{a}, {b}]: expected fractions in (0, 1]"
+            ));
+        }
+        let [a, b] = self.speed;
+        ordered("speed", a, b, f64::MIN_POSITIVE)?;
+        let [a, b] = self.freeze_length;
+        ordered("freeze_length", a as f64, b as f64, 0.0)
+    }
+
+    /// The step indices of a warped version of a `len`-step sequence: non-decreasing, each in
+    /// `0..len`, first 0 and last `len - 1` (the action still starts and ends), at least 2 long
+    /// when `len >= 2`. Deterministic for a given `rng` state.
+    pub fn indices(&self, len: usize, rng: &mut Pcg64) -> Vec<usize> {
+        if len < 3 || !rng.random_bool(self.probability) {
+            return (0..len).collect();
+        }
+        // Source position (in original steps) of every output step.
+        let mut speed = vec![1.0f64; len];
+        for _ in 0..rng.random_range(self.sections[0]..=self.sections[1]) {
+            let fraction = rng.random_range(self.section_fraction[0]..=self.section_fraction[1]);
+            let width = ((fraction * len as f64).round() as usize).clamp(1, len);
+            let start = rng.random_range(0..=len - width);
+            let (lo, hi) = (self.speed[0].ln(), self.speed[1].ln());
+            let factor = rng.random_range(lo..=hi).exp();
+            speed[start..start + width].fill(factor);
+        }
+        let last = (len - 1) as f64;
+        let mut indices = Vec::with_capacity(2 * len);
+        let mut position = 0.0f64;
+        while position < last {
+            indices.push(position.round() as usize);
+            position += speed[position.round() as usize];
+        }
+        indices.push(len - 1);
+        if rng.random_bool(self.freeze_probability) {
+            let at = rng.random_range(0..indices.len());
+            let copies = rng.random_range(self.freeze_length[0]..=self.freeze_length[1]);
+            let step = indices[at];
+            indices.splice(at..at, std::iter::repeat_n(step, copies));
+        }
+        indices
+    }
+
+    /// A warped copy of `seq` (see [`TimeWarpConfig::indices`]).
+    pub fn apply(&self, seq: &Sequence, rng: &mut Pcg64) -> Sequence {
+        gather(seq, &self.indices(seq.len(), rng))
+    }
+}
+
+/// The sequence made of `seq`'s steps `indices` (every index below `seq.len()`).
+pub fn gather(seq: &Sequence, indices: &[usize]) -> Sequence {
+    Sequence {
+        image_size: seq.image_size,
+        joints: indices.iter().map(|&k| seq.joints[k]).collect(),
+        endpoint: indices.iter().map(|&k| seq.endpoint[k]).collect(),
+        object: indices.iter().map(|&k| seq.object[k]).collect(),
+        frames: indices
+            .iter()
+            .flat_map(|&k| seq.frame(k))
+            .copied()
+            .collect(),
+    }
+}

@@ -1,0 +1,60 @@
+use rand::SeedableRng;
+use rand_pcg::Pcg64;
+use wasm_bindgen::prelude::*;
+
+use super::seed::parse_seed;
+use super::Episode;
+use crate::augment::{EvalMode, EvalSequence};
+
+/// One of the paper's evaluation sequences of an episode (t, p or f), with explicit time
+/// stamps: what the page shows the model.
+#[wasm_bindgen]
+pub struct EvalEpisode {
+    inner: EvalSequence,
+}
+
+#[wasm_bindgen]
+impl EvalEpisode {
+    /// Number of steps T.
+    #[wasm_bindgen(getter, js_name = len)]
+    pub fn steps(&self) -> usize {
+        self.inner.sequence.len()
+    }
+
+    /// Shown frames, `Uint8Array(T × S × S × 3)`.
+    pub fn frames(&self) -> Vec<u8> {
+        self.inner.sequence.frames.clone()
+    }
+
+    /// Shown joints, `Float32Array(T × 7)`.
+    pub fn joints(&self) -> Vec<f32> {
+        self.inner.sequence.joints.as_flattened().to_vec()
+    }
+
+    /// Time stamp of every step, `Float32Array(T)` (permuted for p).
+    pub fn times(&self) -> Vec<f32> {
+        self.inner.times.clone()
+    }
+}
+
+#[wasm_bindgen]
+impl Episode {
+    /// The evaluation sequence `mode` of this episode: `"t"` (unchanged), `"p"` (time stamps
+    /// permuted with `seed`) or `"f"` (steps `freezeFrom..freezeTo` show step `freezeFrom`;
+    /// the whole episode when they are omitted). Throws on an unknown mode or seed.
+    #[wasm_bindgen(js_name = evalSequence)]
+    pub fn eval_sequence(
+        &self,
+        mode: &str,
+        seed: f64,
+        #[wasm_bindgen(js_name = freezeFrom)] freeze_from: Option<usize>,
+        #[wasm_bindgen(js_name = freezeTo)] freeze_to: Option<usize>,
+    ) -> Result<EvalEpisode, JsError> {
+        let mode: EvalMode = mode.parse().map_err(|e: String| JsError::new(&e))?;
+        let mut rng = Pcg64::seed_from_u64(parse_seed(seed)?);
+        let freeze = freeze_from.map(|from| (from, freeze_to.unwrap_or(self.sequence().len())));
+        Ok(EvalEpisode {
+            inner: EvalSequence::build(mode, self.sequence(), freeze, &mut rng),
+        })
+    }
+}

@@ -1,0 +1,315 @@
+//! Inference shared by native and wasm: the golden prediction of the shipped weights (which
+//! the wasm tests must reproduce), every bad input as a clear error, and `dmbn predict` end
+//! to end.
+#![cfg(not(target_arch = "wasm32"))]
+
+#[path = "golden/prediction.rs"]
+mod golden_prediction;
+
+use std::path::Path;
+use std::process::Command;
+
+use burn::tensor::Device;
+use dmbn::data::{DatasetWriter, Normalization};
+use dmbn::model::{self, ModelConfig, ModelError, ModelKind};
+use dmbn::predict::{Observations, Predictor};
+use dmbn::sim::{episode, Action};
+use golden_prediction as golden;
+
+#[test]
+fn shipped_weights_reproduce_the_golden_prediction() {
+    let predictor = Predictor::from_bytes(golden::MODEL).unwrap();
+    let seq = episode(Action::Grasp, golden::SEED, 64).unwrap();
+    let observations = Observations::from_sequence(&seq, &golden::OBSERVE).unwrap();
+    let prediction = predictor
+        .predict(&observations, &seq.times(), golden::BLEND)
+        .unwrap();
+    assert_eq!(prediction.len(), seq.len());
+    let sample = golden::sample(&prediction);
+    if std::env::var_os("DMBN_BLESS").is_some() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/golden/prediction.json");
+        std::fs::write(&path, serde_json::to_string(&sample).unwrap()).unwrap();
+        return;
+    }
+    let (diff, at) = golden::max_diff(&sample, &golden::expected());
+    assert!(
+        diff < 1e-5,
+        "differs from tests/golden/prediction.json by {diff} at {at} (re-bless with DMBN_BLESS=1 after changing the weights)"
+    );
+}
+
+#[test]
+fn encoding_once_and_decoding_in_chunks_equals_one_call() {
+    let predictor = Predictor::from_bytes(golden::MODEL).unwrap();
+    let seq = episode(Action::Move, 3, 64).unwrap();
+    let observations = Observations::from_sequence(&seq, &[5, 10]).unwrap();
+    let times = seq.times();
+    let whole = predictor.predict(&observations, &times, 1.0).unwrap();
+    let r = predictor.encode(&observations, 1.0).unwrap();
+    let one = predictor.decode(&r, &times[7..8]).unwrap();
+    let n = 64 * 64 * 3;
+    let diff = one
+        .image_mean
+        .iter()
+        .zip(&whole.image_mean[7 * n..8 * n])
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f32::max);
+    assert!(diff < 1e-5, "decoding one target alone differs by {diff}");
+    let joints = one
+        .joint_mean
+        .iter()
+        .zip(&whole.joint_mean[7 * 7..8 * 7])
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f32::max);
+    assert!(joints < 1e-5, "joints differ by {joints}");
+}
+
+fn fresh(kind: ModelKind, image_size: usize) -> Predictor {
+    let device = Device::flex();
+    let model = ModelConfig::new(kind)
+        .with_image_size(image_size)
+        .init(&device)
+        .unwrap();
+    Predictor::new(model, Normalization::identity())
+}
+
+fn message(err: ModelError) -> String {
+    err.to_string()
+}
+
+#[test]
+fn bad_inference_input_is_a_clear_error() {
+    let predictor = fresh(ModelKind::Pte, 64);
+    let seq = episode(Action::Grasp, 1, 64).unwrap();
+    let good = Observations::from_sequence(&seq, &[0, 10]).unwrap();
+    let times = [0.0, 0.5];
+
+    let mut small = good.clone();
+    small.frames.truncate(2 * 32 * 32 * 3);
+    let err = message(predictor.predict(&small, &times, 0.5).unwrap_err());
+    assert!(err.contains("frames") && err.contains("64×64×3"), "{err}");
+
+    let mut other_size = good.clone();
+    other_size.image_size = 128;
+    let err = message(predictor.predict(&other_size, &times, 0.5).unwrap_err());
+    assert!(err.contains("128x128") && err.contains("64x64"), "{err}");
+
+    let empty = Observations {
+        image_size: 64,
+        frames: vec![],
+        joints: vec![],
+        times: vec![],
+    };
+    let err = message(predictor.predict(&empty, &times, 0.5).unwrap_err());
+    assert!(err.contains("at least one observed step"), "{err}");
+
+    for blend in [1.5, -0.1, f32::NAN] {
+        let err = message(predictor.predict(&good, &times, blend).unwrap_err());
+        assert!(
+            err.contains("blend") && err.contains("[0, 1]"),
+            "{blend}: {err}"
+        );
+    }
+
+    let mut joints = good.clone();
+    joints.joints.pop();
+    let err = message(predictor.predict(&joints, &times, 0.5).unwrap_err());
+    assert!(
+        err.contains("joints") && err.contains("expected 2 steps × 7 = 14"),
+        "{err}"
+    );
+
+    let mut late = good.clone();
+    late.times[1] = 1.5;
+    let err = message(predictor.predict(&late, &times, 0.5).unwrap_err());
+    assert!(err.contains("times") && err.contains("[0, 1]"), "{err}");
+
+    let err = message(
+        predictor
+            .predict(&good, &[0.1, f32::INFINITY], 0.5)
+            .unwrap_err(),
+    );
+    assert!(err.contains("target_times"), "{err}");
+
+    let err = message(Observations::from_sequence(&seq, &[0, 999]).unwrap_err());
+    assert!(err.contains("999"), "{err}");
+
+    // No target times: an empty prediction, not an error.
+    assert!(predictor.predict(&good, &[], 0.5).unwrap().is_empty());
+}
+
+#[test]
+fn bad_model_files_are_clear_errors() {
+    let bytes = golden::MODEL;
+    let err = message(Predictor::from_bytes(&bytes[..bytes.len() / 2]).unwrap_err());
+    assert!(err.contains("truncated"), "{err}");
+    let err = message(Predictor::from_bytes(b"\x89PNG\r\n\x1a\n0000000000").unwrap_err());
+    assert!(err.contains("not a dmbn model file"), "{err}");
+    let err = message(Predictor::from_bytes(&[]).unwrap_err());
+    assert!(!err.is_empty());
+    let err =
+        message(Predictor::from_bytes_expecting(bytes, Some(ModelKind::Pte), None).unwrap_err());
+    assert!(err.contains("pte") && err.contains("dmbn"), "{err}");
+    let err = message(Predictor::from_bytes_expecting(bytes, None, Some(128)).unwrap_err());
+    assert!(err.contains("128"), "{err}");
+    let err = message(Predictor::load("/nonexistent/model.dmbn").unwrap_err());
+    assert!(err.contains("/nonexistent/model.dmbn"), "{err}");
+}
+
+fn dmbn(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_dmbn"))
+        .args(args)
+        .output()
+        .expect("run dmbn")
+}
+
+#[test]
+fn dmbn_predict_writes_figures_and_scores() {
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("data");
+    let mut writer = DatasetWriter::create(&data).unwrap();
+    writer
+        .write(0, "grasp", &episode(Action::Grasp, 11, 64).unwrap())
+        .unwrap();
+    writer.finish().unwrap();
+    let model_path = tmp.path().join("model.dmbn");
+    let device = Device::flex();
+    let model = ModelConfig::new(ModelKind::Dmbn).init(&device).unwrap();
+    model::save(&model_path, &model, &Normalization::identity(), true).unwrap();
+    let out = tmp.path().join("out");
+    let (m, d, o) = (
+        model_path.to_str().unwrap(),
+        data.to_str().unwrap(),
+        out.to_str().unwrap(),
+    );
+
+    let run = dmbn(&[
+        "predict",
+        "--model",
+        m,
+        "--data",
+        d,
+        "--sequence",
+        "0/grasp",
+        "--observe",
+        "0,20,40",
+        "--out",
+        o,
+    ]);
+    let stdout = String::from_utf8_lossy(&run.stdout);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    assert!(
+        stdout.contains("image: MSE") && stdout.contains("NLL"),
+        "{stdout}"
+    );
+    let steps = episode(Action::Grasp, 11, 64).unwrap().len();
+    for dir in ["mean", "sigma", "truth"] {
+        assert_eq!(
+            std::fs::read_dir(out.join(dir)).unwrap().count(),
+            steps,
+            "{dir}"
+        );
+        let frame = image::open(out.join(dir).join("0.png")).unwrap();
+        assert_eq!((frame.width(), frame.height()), (64, 64));
+    }
+    assert!(image::open(out.join("joints.png")).unwrap().width() > 100);
+    let scores: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("scores.json")).unwrap()).unwrap();
+    assert!(scores["scores"]["image_mse"].as_f64().unwrap() > 0.0);
+    assert_eq!(scores["observed"], serde_json::json!([0, 20, 40]));
+
+    let fails = |args: &[&str], needle: &str| {
+        let run = dmbn(args);
+        let stderr = String::from_utf8_lossy(&run.stderr);
+        assert!(
+            !run.status.success() && stderr.contains(needle),
+            "{args:?}: {stderr}"
+        );
+    };
+    fails(
+        &[
+            "predict",
+            "--model",
+            m,
+            "--data",
+            d,
+            "--sequence",
+            "0/grasp",
+            "--observe",
+            "0",
+            "--blend",
+            "2",
+            "--out",
+            o,
+        ],
+        "[0, 1]",
+    );
+    fails(
+        &[
+            "predict",
+            "--model",
+            m,
+            "--data",
+            d,
+            "--sequence",
+            "5/grasp",
+            "--observe",
+            "0",
+            "--out",
+            o,
+        ],
+        "no sequence 5/grasp",
+    );
+    fails(
+        &[
+            "predict",
+            "--model",
+            m,
+            "--data",
+            d,
+            "--sequence",
+            "grasp",
+            "--observe",
+            "0",
+            "--out",
+            o,
+        ],
+        "ID/ACTION",
+    );
+    fails(
+        &[
+            "predict",
+            "--model",
+            m,
+            "--data",
+            d,
+            "--sequence",
+            "0/grasp",
+            "--observe",
+            "0,500",
+            "--out",
+            o,
+        ],
+        "500",
+    );
+    fails(
+        &[
+            "predict",
+            "--model",
+            d,
+            "--data",
+            d,
+            "--sequence",
+            "0/grasp",
+            "--observe",
+            "0",
+            "--out",
+            o,
+        ],
+        d,
+    );
+}
