@@ -26,17 +26,37 @@ fn synthetic(k: usize, with_time: bool, seed: u64) -> Encodings {
             image.extend(noise);
         }
     }
-    Encodings { hidden: 8, joint: image.clone(), image, times }
+    Encodings {
+        hidden: 8,
+        joint: image.clone(),
+        image,
+        times,
+    }
 }
 
 #[test]
 fn the_probe_head_reads_time_when_it_is_there_and_not_otherwise() {
     let head = HeadConfig::new().with_steps(600);
-    let with = fit_head(&synthetic(2000, true, 1), &synthetic(500, true, 2), true, &head, 0);
+    let with = fit_head(
+        &synthetic(2000, true, 1),
+        &synthetic(500, true, 2),
+        true,
+        &head,
+        0,
+    );
     assert!(with < 2e-3, "time in the encoding: MSE {with}");
-    let without = fit_head(&synthetic(2000, false, 1), &synthetic(500, false, 2), false, &head, 0);
+    let without = fit_head(
+        &synthetic(2000, false, 1),
+        &synthetic(500, false, 2),
+        false,
+        &head,
+        0,
+    );
     // Var(t) of U(0, 1) is 1/12 ≈ 0.083: a head that learns nothing predicts the mean.
-    assert!((0.07..0.11).contains(&without), "no time in the encoding: MSE {without}");
+    assert!(
+        (0.07..0.11).contains(&without),
+        "no time in the encoding: MSE {without}"
+    );
 }
 
 #[test]
@@ -55,7 +75,10 @@ fn confidence_intervals_of_known_samples() {
 }
 
 fn dmbn(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_dmbn")).args(args).output().expect("run dmbn")
+    Command::new(env!("CARGO_BIN_EXE_dmbn"))
+        .args(args)
+        .output()
+        .expect("run dmbn")
 }
 
 #[test]
@@ -64,7 +87,13 @@ fn dmbn_eval_and_probe_run_end_to_end() {
     let data = tmp.path().join("data");
     let mut writer = DatasetWriter::create(&data).unwrap();
     for id in 0..3u32 {
-        writer.write(id, "grasp", &episode(Action::Grasp, 20 + id as u64, 64).unwrap()).unwrap();
+        writer
+            .write(
+                id,
+                "grasp",
+                &episode(Action::Grasp, 20 + id as u64, 64).unwrap(),
+            )
+            .unwrap();
     }
     writer.finish().unwrap();
     let device = Device::flex();
@@ -79,32 +108,99 @@ fn dmbn_eval_and_probe_run_end_to_end() {
     let out = tmp.path().join("eval");
     let o = out.to_str().unwrap();
     for mode in ["t", "p", "f"] {
-        let run = dmbn(&["eval", "--model", &paths[1], "--data", d, "--sequence", "1/grasp", "--mode", mode, "--observations", "5", "--out", o]);
-        assert!(run.status.success(), "{mode}: {}", String::from_utf8_lossy(&run.stderr));
+        let run = dmbn(&[
+            "eval",
+            "--model",
+            &paths[1],
+            "--data",
+            d,
+            "--sequence",
+            "1/grasp",
+            "--mode",
+            mode,
+            "--observations",
+            "5",
+            "--out",
+            o,
+        ]);
+        assert!(
+            run.status.success(),
+            "{mode}: {}",
+            String::from_utf8_lossy(&run.stderr)
+        );
         let stdout = String::from_utf8_lossy(&run.stdout);
-        assert!(stdout.contains(&format!("{mode}-sequence")) && stdout.contains("NLL"), "{stdout}");
+        assert!(
+            stdout.contains(&format!("{mode}-sequence")) && stdout.contains("NLL"),
+            "{stdout}"
+        );
         assert!(image::open(out.join("figure.png")).unwrap().height() > 500);
-        let json: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join("eval.json")).unwrap()).unwrap();
+        let json: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out.join("eval.json")).unwrap()).unwrap();
         assert_eq!(json["mode"], mode);
         assert_eq!(json["observed"].as_array().unwrap().len(), 5);
     }
-    let run = dmbn(&["eval", "--model", &paths[0], "--data", d, "--sequence", "1/grasp", "--mode", "x", "--observations", "5", "--out", o]);
+    let run = dmbn(&[
+        "eval",
+        "--model",
+        &paths[0],
+        "--data",
+        d,
+        "--sequence",
+        "1/grasp",
+        "--mode",
+        "x",
+        "--observations",
+        "5",
+        "--out",
+        o,
+    ]);
     assert!(String::from_utf8_lossy(&run.stderr).contains("t, p or f"));
 
     let probe_out = tmp.path().join("probe");
     let run = dmbn(&[
-        "probe", "--data", d, "--dmbn", &paths[0], "--pte", &paths[1], "--seeds", "2", "--head-steps", "30",
-        "--test-fraction", "0.34", "--out", probe_out.to_str().unwrap(),
+        "probe",
+        "--data",
+        d,
+        "--dmbn",
+        &paths[0],
+        "--pte",
+        &paths[1],
+        "--seeds",
+        "2",
+        "--head-steps",
+        "30",
+        "--test-fraction",
+        "0.34",
+        "--out",
+        probe_out.to_str().unwrap(),
     ]);
-    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
     let table = std::fs::read_to_string(probe_out.join("probe.md")).unwrap();
     for row in ["| Null |", "| Random |", "| DMBN |", "| DMBN-PTE |"] {
         assert!(table.contains(row), "{table}");
     }
-    let json: serde_json::Value = serde_json::from_slice(&std::fs::read(probe_out.join("probe.json")).unwrap()).unwrap();
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(probe_out.join("probe.json")).unwrap()).unwrap();
     assert_eq!(json["rows"][3]["image_mse"].as_array().unwrap().len(), 2);
     // Swapped models are refused with the file named.
-    let run = dmbn(&["probe", "--data", d, "--dmbn", &paths[1], "--pte", &paths[0], "--out", probe_out.to_str().unwrap()]);
+    let run = dmbn(&[
+        "probe",
+        "--data",
+        d,
+        "--dmbn",
+        &paths[1],
+        "--pte",
+        &paths[0],
+        "--out",
+        probe_out.to_str().unwrap(),
+    ]);
     let stderr = String::from_utf8_lossy(&run.stderr);
-    assert!(!run.status.success() && stderr.contains("expected dmbn"), "{stderr}");
+    assert!(
+        !run.status.success() && stderr.contains("expected dmbn"),
+        "{stderr}"
+    );
 }
