@@ -7,9 +7,11 @@ mod model;
 mod region;
 mod seed;
 mod simulator;
+mod streaming;
 
 pub use episode::{run_episode, Episode};
 pub use eval_episode::EvalEpisode;
 pub use model::{ModelHandle, Prediction};
 pub use region::{placement_region, Region};
 pub use simulator::Simulator;
+pub use streaming::{Encoding, StreamingModel};

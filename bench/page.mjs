@@ -1,0 +1,195 @@
+#!/usr/bin/env node
+// The demo page in headless Chromium (the browser tests' setup): time from navigation to
+// `ready` on localhost, the wasm size (raw and gzip), one predicted frame and a 100-step
+// sequence for both models through the page's worker, and the page's own progressive
+// prediction of a whole episode. Saves a screenshot of the page mid-prediction to
+// docs/page.png.
+//
+// Usage: node bench/page.mjs [--runs N] [--no-screenshot]
+//   Needs the web package: wasm-pack build --release --target web --out-dir pkg --no-typescript
+//   Figures are medians: N cold page loads (default 7, own browser context and empty cache
+//   each), 5N one-frame and N 100-step predictions per model. Prints a table and one `json:` line.
+import { existsSync, readFileSync, statSync } from "node:fs";
+import { cpus, loadavg } from "node:os";
+import { dirname, join } from "node:path";
+import { fileURLToPath } from "node:url";
+import { gzipSync } from "node:zlib";
+
+import { launch } from "../tests/browser/browser.mjs";
+import { serve } from "../tests/browser/server.mjs";
+
+const ROOT = join(dirname(fileURLToPath(import.meta.url)), "..");
+const args = process.argv.slice(2);
+let runs = 7;
+let screenshot = true;
+for (let i = 0; i < args.length; i++) {
+  if (args[i] === "--runs") runs = Number(args[++i]);
+  else if (args[i] === "--no-screenshot") screenshot = false;
+  else {
+    console.log("usage: node bench/page.mjs [--runs N] [--no-screenshot]");
+    process.exit(args[i] === "-h" || args[i] === "--help" ? 0 : 2);
+  }
+}
+if (!Number.isInteger(runs) || runs < 3) {
+  console.error("--runs must be an integer >= 3");
+  process.exit(2);
+}
+const wasmFile = join(ROOT, "pkg", "dmbn_bg.wasm");
+if (!existsSync(wasmFile)) {
+  console.error("no web package in pkg/: build it with\n  wasm-pack build --release --target web --out-dir pkg --no-typescript");
+  process.exit(2);
+}
+
+const median = (xs) => {
+  const s = [...xs].sort((a, b) => a - b);
+  const m = Math.floor(s.length / 2);
+  return s.length % 2 ? s[m] : (s[m - 1] + s[m]) / 2;
+};
+const round = (v, d = 1) => Number(v.toFixed(d));
+const TIMEOUT = 120_000;
+
+async function waitState(page, wanted) {
+  await page.waitForFunction(
+    (w) => document.body.dataset.state === w || document.body.dataset.state === "error",
+    wanted,
+    { timeout: TIMEOUT },
+  );
+  const state = await page.evaluate(() => document.body.dataset.state);
+  if (state !== wanted) throw new Error(`page: ${await page.locator("#error").textContent()}`);
+}
+
+const load = loadavg()[0];
+const server = await serve(ROOT);
+const browser = await launch();
+const result = {};
+try {
+  // Sizes.
+  const wasm = readFileSync(wasmFile);
+  const glue = readFileSync(join(ROOT, "pkg", "dmbn.js"));
+  result.wasm_bytes = wasm.length;
+  result.wasm_gzip_bytes = gzipSync(wasm, { level: 9 }).length;
+  result.glue_bytes = glue.length;
+  result.glue_gzip_bytes = gzipSync(glue, { level: 9 }).length;
+  for (const [kind, file] of [["dmbn", "dmbn-sim.dmbn"], ["pte", "pte-sim.dmbn"]]) {
+    const path = join(ROOT, "assets", "models", file);
+    if (existsSync(path)) {
+      result[`${kind}_weights_bytes`] = statSync(path).size;
+      result[`${kind}_weights_gzip_bytes`] = gzipSync(readFileSync(path), { level: 9 }).length;
+    }
+  }
+
+  // Cold loads to `ready` (wasm compiled, episode simulated, DMBN weights fetched and parsed).
+  const ready = [];
+  const wasmMs = [];
+  const modelMs = [];
+  for (let i = 0; i < runs; i++) {
+    const context = await browser.newContext({ viewport: { width: 1280, height: 940 } });
+    const page = await context.newPage();
+    await page.goto(`${server.url}www/`);
+    await waitState(page, "ready");
+    const t = await page.evaluate(() => window.dmbnTimings);
+    ready.push(t.ready_ms);
+    wasmMs.push(t.wasm_ms);
+    modelMs.push(t.models.dmbn.fetchMs + t.models.dmbn.parseMs);
+    await context.close();
+  }
+  result.ready_ms = round(median(ready));
+  result.wasm_load_ms = round(median(wasmMs));
+  result.model_load_ms = round(median(modelMs));
+
+  // Inference through the page's workers: 5 observed steps of grasp seed 7 (both modalities).
+  const context = await browser.newContext({ viewport: { width: 1280, height: 940 } });
+  const page = await context.newPage();
+  const open = async (query) => {
+    await page.goto(`${server.url}www/?action=grasp&seed=7&obs=0,10,20,30,40&${query}`);
+    await waitState(page, "ready");
+    await page.click("#play"); // pause the animation
+  };
+  for (const kind of ["dmbn", "pte"]) {
+    await open(`model=${kind}`);
+    const time = (n) => page.evaluate(([n, kind]) => window.dmbn.timePrediction(n, kind), [n, kind]);
+    // Warm-up; also lets the other workers finish loading the weights in the background.
+    await new Promise((r) => setTimeout(r, 1000));
+    await time(1);
+    const warm = await time(100);
+    const one = [];
+    for (let i = 0; i < runs * 5; i++) one.push(await time(1));
+    const seq = [];
+    for (let i = 0; i < runs; i++) seq.push(await time(100));
+    // The page's own path: Predict → every step of the episode drawn, state `predicted`.
+    const whole = [];
+    for (let i = 0; i < 3; i++) {
+      const before = await page.evaluate(() => Number(document.body.dataset.predictions ?? 0));
+      await page.click("#predict");
+      await page.waitForFunction((n) => Number(document.body.dataset.predictions ?? 0) > n, before, { timeout: TIMEOUT });
+      whole.push(await page.evaluate(() => window.dmbnTimings.prediction));
+    }
+    // The same 100 steps in one worker.
+    await open(`model=${kind}&workers=1`);
+    await time(100);
+    const single = [];
+    for (let i = 0; i < runs; i++) single.push((await time(100)).wall_ms);
+    result[kind] = {
+      one_frame_ms: round(median(one.map((r) => r.wall_ms)), 2),
+      one_frame_decode_ms: round(median(one.map((r) => r.decode_ms)), 2),
+      encode_ms: round(median(one.map((r) => r.encode_ms))),
+      sequence100_ms: round(median(seq.map((r) => r.wall_ms))),
+      sequence100_first_chunk_ms: round(median(seq.map((r) => r.first_chunk_ms))),
+      sequence100_workers: warm.workers,
+      sequence100_one_worker_ms: round(median(single)),
+      page_sequence_steps: whole[0].steps,
+      page_sequence_ms: round(median(whole.map((w) => w.total_ms))),
+      page_first_chunk_ms: round(median(whole.map((w) => w.first_chunk_ms))),
+    };
+  }
+  await context.close();
+  result.chromium = browser.version();
+
+  // A screenshot mid-prediction (chunks slowed down so the moment is easy to catch).
+  if (screenshot) {
+    const context = await browser.newContext({ viewport: { width: 1280, height: 900 } });
+    const page = await context.newPage();
+    await page.goto(`${server.url}www/?action=move&seed=5&model=pte&obs=0,14,29,44,58,72&chunkDelay=250`);
+    await waitState(page, "ready");
+    await page.click("#play");
+    await page.click("#predict");
+    const len = Number(await page.getAttribute("#scrubber", "max")) + 1;
+    await page.waitForFunction((n) => Number(document.body.dataset.progress) >= n, Math.floor(len * 0.45), { timeout: TIMEOUT });
+    await page.locator("#scrubber").fill(String(Math.floor(len * 0.3)));
+    await page.screenshot({ path: join(ROOT, "docs", "page.png"), fullPage: true });
+    await context.close();
+  }
+  result.load_average = [round(load, 2), round(loadavg()[0], 2)];
+} finally {
+  await browser.close();
+  await server.close();
+}
+
+const kb = (b) => `${(b / 1024).toFixed(0)} KiB`;
+const mb = (b) => `${(b / 1048576).toFixed(2)} MiB`;
+const ms = (v) => `${v < 20 ? v.toFixed(1) : Math.round(v)} ms`;
+console.log(
+  `page benchmark: headless Chromium ${result.chromium}, ${cpus().length}× ${cpus()[0].model}, ` +
+    `load average ${result.load_average[0]} at the start, ${result.load_average[1]} at the end`,
+);
+console.log(`  medians of ${runs} cold loads, ${runs * 5} one-frame and ${runs} 100-step predictions per model\n`);
+console.log(`| measure | value | goal |`);
+console.log(`|---|---|---|`);
+console.log(`| time to \`ready\` (localhost, cold cache) | ${ms(result.ready_ms)} | ≤ 2000 ms |`);
+console.log(`| … of which wasm fetch + compile + init | ${ms(result.wasm_load_ms)} | |`);
+console.log(`| … of which DMBN weights fetch + parse (worker, in parallel) | ${ms(result.model_load_ms)} | |`);
+console.log(`| wasm size raw / gzip -9 | ${mb(result.wasm_bytes)} / ${mb(result.wasm_gzip_bytes)} | |`);
+console.log(`| JS glue raw / gzip -9 | ${kb(result.glue_bytes)} / ${kb(result.glue_gzip_bytes)} | |`);
+for (const kind of ["dmbn", "pte"]) {
+  const r = result[kind];
+  const name = kind === "dmbn" ? "DMBN" : "DMBN-PTE";
+  const w = r.sequence100_workers;
+  console.log(`| ${name}: one predicted frame (decode; observations encoded once) | ${ms(r.one_frame_decode_ms)} | ≤ 15 ms |`);
+  console.log(`| ${name}: one frame from scratch (encode 5 observations + decode 1, round trip) | ${ms(r.one_frame_ms)} | |`);
+  console.log(`| ${name}: … of which encoding the 5 observations | ${ms(r.encode_ms)} | |`);
+  console.log(`| ${name}: 100-step sequence, ${w} worker${w > 1 ? "s" : ""} | ${ms(r.sequence100_ms)} (${ms(r.sequence100_ms / 100)} per frame) | ≤ 600 ms |`);
+  console.log(`| ${name}: 100-step sequence, 1 worker | ${ms(r.sequence100_one_worker_ms)} | |`);
+  console.log(`| ${name}: 100-step sequence, first chunk (10 steps) back | ${ms(r.sequence100_first_chunk_ms)} | |`);
+  console.log(`| ${name}: page, Predict → all ${r.page_sequence_steps} steps drawn | ${ms(r.page_sequence_ms)} | |`);
+}
+console.log(`\njson: ${JSON.stringify(result)}`);

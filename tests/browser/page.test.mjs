@@ -1,0 +1,372 @@
+// Browser tests of the demo page (www/) in headless Chromium, driven by playwright-core.
+// Needs the web package: `wasm-pack build --release --target web --out-dir pkg`, then
+// `node --test tests/browser/` (`.ci/run` does both). Screenshots go to artifacts/browser/.
+import assert from "node:assert/strict";
+import { existsSync, mkdirSync } from "node:fs";
+import { dirname, join } from "node:path";
+import { after, before, describe, test } from "node:test";
+import { fileURLToPath } from "node:url";
+
+import { launch } from "./browser.mjs";
+import { serve } from "./server.mjs";
+
+const ROOT = join(dirname(fileURLToPath(import.meta.url)), "..", "..");
+const ARTIFACTS = join(ROOT, "artifacts", "browser");
+/** Generous: the machine may be busy, and a cold start compiles a few MB of wasm. */
+const TIMEOUT = 60_000;
+
+let browser;
+let server;
+
+before(async () => {
+  assert.ok(
+    existsSync(join(ROOT, "pkg", "dmbn.js")),
+    "no web package in pkg/: build it with `wasm-pack build --release --target web --out-dir pkg --no-typescript`",
+  );
+  mkdirSync(ARTIFACTS, { recursive: true });
+  browser = await launch();
+  // 200 random-looking bytes: not a model file.
+  const corrupt = Buffer.from(Array.from({ length: 200 }, (_, i) => (i * 73 + 41) % 256));
+  server = await serve(ROOT, { files: { "/test/corrupt.dmbn": corrupt } });
+});
+
+after(async () => {
+  await browser?.close();
+  await server?.close();
+});
+
+/** A fresh page (own context, empty cache) that records console errors and uncaught exceptions. */
+async function open(url, { init } = {}) {
+  const context = await browser.newContext({ viewport: { width: 1280, height: 940 } });
+  const page = await context.newPage();
+  page.setDefaultTimeout(TIMEOUT);
+  page.problems = [];
+  page.on("pageerror", (err) => page.problems.push(`pageerror: ${err.message}`));
+  page.on("console", (msg) => {
+    if (msg.type() === "error") page.problems.push(`console: ${msg.text()}`);
+  });
+  if (init) await page.addInitScript(init);
+  await page.goto(url);
+  return page;
+}
+
+const close = (page) => page.context().close();
+const shot = (page, name) => page.screenshot({ path: join(ARTIFACTS, `${name}.png`) });
+const state = (page) => page.evaluate(() => document.body.dataset.state);
+const errorText = (page) => page.locator("#error").textContent();
+
+/** Waits for `wanted`; fails at once, with the page's message, when the page shows an error instead. */
+async function waitState(page, wanted) {
+  await page.waitForFunction(
+    (w) => document.body.dataset.state === w || document.body.dataset.state === "error",
+    wanted,
+    { timeout: TIMEOUT },
+  );
+  const now = await state(page);
+  if (now !== wanted) assert.fail(`expected state ${wanted}, got ${now}: ${await errorText(page)}`);
+}
+
+/** Predicts (button) and waits until a new prediction has finished. */
+async function predict(page, trigger = () => page.click("#predict")) {
+  const before = await page.evaluate(() => Number(document.body.dataset.predictions ?? 0));
+  await trigger();
+  await page.waitForFunction(
+    (n) => Number(document.body.dataset.predictions ?? 0) > n || document.body.dataset.state === "error",
+    before,
+    { timeout: TIMEOUT },
+  );
+  await waitState(page, "predicted");
+}
+
+/** Statistics of a canvas's pixels: mean and standard deviation of the RGB values, and a hash. */
+function pixels(page, id) {
+  return page.evaluate((id) => {
+    const c = document.getElementById(id);
+    const d = c.getContext("2d").getImageData(0, 0, c.width, c.height).data;
+    let sum = 0;
+    let sq = 0;
+    let n = 0;
+    let hash = 2166136261;
+    for (let i = 0; i < d.length; i++) {
+      if (i % 4 === 3) continue;
+      sum += d[i];
+      sq += d[i] * d[i];
+      n++;
+      hash = Math.imul(hash ^ d[i], 16777619) >>> 0;
+    }
+    const mean = sum / n;
+    return { mean, std: Math.sqrt(Math.max(0, sq / n - mean * mean)), hash };
+  }, id);
+}
+
+/** The predicted output at a fixed step: frame, σ map and joint plot. */
+async function output(page, step = 20) {
+  await page.locator("#scrubber").fill(String(step));
+  const frame = await pixels(page, "frame-pred");
+  const sigma = await pixels(page, "sigma-map");
+  const plot = await pixels(page, "joints-plot");
+  return `${frame.hash}/${sigma.hash}/${plot.hash}`;
+}
+
+/** Stops playback, so frames only change when a test asks. */
+async function pause(page) {
+  if ((await page.getAttribute("#play", "aria-pressed")) === "true") await page.click("#play");
+}
+
+describe("demo page", () => {
+  test("loads to ready, with every control labelled", async () => {
+    const page = await open(`${server.url}www/`);
+    await waitState(page, "ready");
+    for (const id of ["action", "model", "mode", "observe", "predict", "scrubber", "frame-true", "frame-pred", "sigma-map", "joints-plot", "error"]) {
+      assert.equal(await page.locator(`#${id}`).count(), 1, `#${id} is on the page`);
+    }
+    assert.equal(await page.locator("#error").isHidden(), true);
+    const unlabelled = await page.evaluate(() =>
+      [...document.querySelectorAll("input, select, button")]
+        .filter((el) => !(el.labels?.length || el.getAttribute("aria-label") || el.textContent.trim()))
+        .map((el) => el.id),
+    );
+    assert.deepEqual(unlabelled, []);
+    const timings = await page.evaluate(() => window.dmbnTimings);
+    assert.ok(timings.ready_ms > 0 && timings.models.dmbn.bytes > 0);
+    await shot(page, "ready");
+    assert.deepEqual(page.problems, []);
+    await close(page);
+  });
+
+  test("the server root leads to the page", async () => {
+    const page = await open(server.url);
+    await page.waitForURL(/\/www\/(\?.*)?$/);
+    await waitState(page, "ready");
+    await close(page);
+  });
+
+  test("works under a path prefix", async () => {
+    const prefixed = await serve(ROOT, { prefix: "/some/prefix/" });
+    try {
+      const page = await open(`${prefixed.url}www/`);
+      await waitState(page, "ready");
+      await predict(page);
+      await close(page);
+    } finally {
+      await prefixed.close();
+    }
+  });
+
+  test("an episode animates; action, seed and table clicks make new episodes", async () => {
+    const page = await open(`${server.url}www/`);
+    await waitState(page, "ready");
+    // Playing from step 0 at 20 steps/s.
+    const a = await pixels(page, "frame-true");
+    const s0 = Number(await page.inputValue("#scrubber"));
+    await page.waitForFunction((s) => Number(document.getElementById("scrubber").value) > s + 5, s0);
+    const b = await pixels(page, "frame-true");
+    assert.notEqual(a.hash, b.hash, "the true frame changes while playing");
+    assert.ok(b.std > 5, "the true frame is not blank");
+    await shot(page, "animating");
+
+    const episode = () => page.getAttribute("#object-info", "title");
+    const first = await episode();
+    await page.selectOption("#action", "move");
+    const moved = await episode();
+    assert.notEqual(moved, first, "a new episode for another action");
+    assert.equal(Number(await page.inputValue("#scrubber")) <= 2, true, "it plays from the start");
+    await page.fill("#seed", "3");
+    await page.press("#seed", "Enter");
+    await page.locator("#seed").blur();
+    await page.waitForFunction((m) => document.getElementById("object-info").title !== m, moved);
+    const seeded = await episode();
+    // Click near the left edge of the table map: the object goes there.
+    const box = await page.locator("#table").boundingBox();
+    await page.mouse.click(box.x + box.width * 0.2, box.y + box.height * 0.5);
+    await page.waitForFunction((m) => document.getElementById("object-info").title !== m, seeded);
+    const info = await page.textContent("#object-info");
+    const x = Number(/object at \((-?[\d.]+),/.exec(info)[1]);
+    assert.ok(x < -0.05, `object placed on the left (x = ${x})`);
+    assert.match(page.url(), /[?&]x=-0\.\d+/, "the placement is in the URL");
+    assert.equal(await state(page), "ready");
+    assert.deepEqual(page.problems, []);
+    await close(page);
+  });
+
+  test("keyboard: space plays and pauses, arrows scrub", async () => {
+    const page = await open(`${server.url}www/`);
+    await waitState(page, "ready");
+    await pause(page);
+    await page.locator("body").click({ position: { x: 5, y: 5 } });
+    await page.keyboard.press("Home");
+    assert.equal(await page.inputValue("#scrubber"), "0");
+    await page.keyboard.press("ArrowRight");
+    await page.keyboard.press("ArrowRight");
+    assert.equal(await page.inputValue("#scrubber"), "2");
+    await page.keyboard.press("ArrowLeft");
+    assert.equal(await page.inputValue("#scrubber"), "1");
+    await page.keyboard.press("Space");
+    assert.equal(await page.getAttribute("#play", "aria-pressed"), "true");
+    await page.keyboard.press("Space");
+    assert.equal(await page.getAttribute("#play", "aria-pressed"), "false");
+    // Enter on the focused timeline observes the current step (1), and stops observing it.
+    const observed = () => page.evaluate(() => new URLSearchParams(location.search).get("obs").split(",").map(Number));
+    const before = await observed();
+    await page.focus("#timeline");
+    await page.keyboard.press("Enter");
+    assert.equal((await observed()).includes(1), !before.includes(1));
+    await page.keyboard.press("Enter");
+    assert.deepEqual(await observed(), before);
+    await close(page);
+  });
+
+  test("a prediction fills in and shows a predicted frame, a σ map and joint bands", async () => {
+    const page = await open(`${server.url}www/?chunkDelay=150`);
+    await waitState(page, "ready");
+    await pause(page);
+    await page.fill("#k", "6");
+    await page.click("#random-k");
+    await page.click("#predict");
+    // Part of the sequence in, the rest still to come, and the page responsive meanwhile.
+    await page.waitForFunction(() => Number(document.body.dataset.progress) > 0);
+    assert.equal(await state(page), "predicting");
+    const progress = Number(await page.evaluate(() => document.body.dataset.progress));
+    const len = Number(await page.getAttribute("#scrubber", "max")) + 1;
+    assert.ok(progress < len, `progressive: ${progress} of ${len} steps`);
+    await page.keyboard.press("Home");
+    assert.equal(await page.inputValue("#scrubber"), "0", "the page answers keys while predicting");
+    await shot(page, "predicting");
+    await waitState(page, "predicted");
+
+    await page.locator("#scrubber").fill(String(Math.floor(len / 2)));
+    const frame = await pixels(page, "frame-pred");
+    const sigma = await pixels(page, "sigma-map");
+    assert.ok(frame.std > 5, `predicted frame is not blank (std ${frame.std.toFixed(1)})`);
+    assert.ok(sigma.std > 1 && sigma.mean > 2, `σ map is not blank (mean ${sigma.mean.toFixed(1)}, std ${sigma.std.toFixed(1)})`);
+    const timing = await page.textContent("#timing");
+    assert.match(timing, /\d+ steps in \d+ ms \([\d.]+ ms per frame\)/);
+    const t = await page.evaluate(() => window.dmbnTimings.prediction);
+    assert.equal(t.steps, len);
+    assert.ok(t.total_ms > 0 && t.per_frame_ms > 0);
+    // The overlay toggles and fades.
+    await page.uncheck("#sigma-toggle");
+    assert.equal(await page.locator("#sigma-map").isHidden(), true);
+    await page.check("#sigma-toggle");
+    await page.locator("#sigma-opacity").fill("80");
+    assert.equal(await page.evaluate(() => document.getElementById("sigma-map").style.opacity), "0.8");
+    await shot(page, "predicted");
+    assert.deepEqual(page.problems, []);
+    await close(page);
+  });
+
+  test("inference never blocks the page for long", async () => {
+    const page = await open(`${server.url}www/`);
+    await waitState(page, "ready");
+    await pause(page);
+    await page.evaluate(() => {
+      window.longTasks = [];
+      new PerformanceObserver((list) => window.longTasks.push(...list.getEntries().map((e) => e.duration))).observe({
+        type: "longtask",
+      });
+    });
+    await predict(page);
+    const longest = await page.evaluate(() => Math.max(0, ...window.longTasks));
+    assert.ok(longest < 300, `longest main-thread task during a prediction: ${longest} ms`);
+    await close(page);
+  });
+
+  test("switching model, mode or observed modality changes the output", async () => {
+    const page = await open(`${server.url}www/?action=grasp&seed=11&obs=0,8,16,30,44`);
+    await waitState(page, "ready");
+    await pause(page);
+    await predict(page);
+    const seen = new Map([["dmbn t both", await output(page)]]);
+    // Each change predicts again (the page is live after the first prediction); a new setting
+    // gives a new output, a setting seen before gives the same output again (deterministic).
+    const change = async (select, value, label) => {
+      await predict(page, () => page.selectOption(select, value));
+      const out = await output(page);
+      if (seen.has(label)) {
+        assert.equal(out, seen.get(label), `${label} again gives the same output`);
+        return;
+      }
+      for (const [other, o] of seen) assert.notEqual(out, o, `${label} differs from ${other}`);
+      seen.set(label, out);
+      await shot(page, `switch-${label.replaceAll(" ", "-")}`);
+    };
+    await change("#model", "pte", "pte t both");
+    await change("#mode", "p", "pte p both");
+    await change("#mode", "f", "pte f both");
+    await change("#model", "dmbn", "dmbn f both");
+    await change("#mode", "t", "dmbn t both");
+    await change("#observe", "joints", "dmbn t joints");
+    await change("#observe", "images", "dmbn t images");
+    assert.match(page.url(), /model=dmbn.*mode=t.*observe=images/);
+    // Clicking a frame on the timeline observes it, and predicts again.
+    const box = await page.locator("#timeline").boundingBox();
+    const len = Number(await page.getAttribute("#scrubber", "max")) + 1;
+    await predict(page, () => page.mouse.click(box.x + box.width * (24.5 / len), box.y + box.height / 2));
+    assert.match(page.url(), /obs=0%2C8%2C16%2C24%2C30%2C44/);
+    assert.notEqual(await output(page), seen.get("dmbn t images"));
+    assert.deepEqual(page.problems, []);
+    await close(page);
+  });
+
+  test("corrupt weights show a clear error", async () => {
+    const page = await open(`${server.url}www/?dmbn=/test/corrupt.dmbn`);
+    await waitState(page, "error");
+    const text = await errorText(page);
+    assert.match(text, /DMBN weights .*corrupt\.dmbn are corrupt or not a model file/);
+    assert.equal(await page.locator("#error").isVisible(), true);
+    await shot(page, "error-corrupt-weights");
+    await close(page);
+  });
+
+  test("missing weights show a clear error, and the page recovers with the other model", async () => {
+    const page = await open(`${server.url}www/?pte=../assets/models/no-such-file.dmbn`);
+    await waitState(page, "ready");
+    await page.selectOption("#model", "pte");
+    await waitState(page, "error");
+    assert.match(await errorText(page), /DMBN-PTE weights.*HTTP 404/);
+    await shot(page, "error-missing-weights");
+    await page.selectOption("#model", "dmbn");
+    await waitState(page, "ready");
+    assert.equal(await page.locator("#error").isHidden(), true);
+    await predict(page);
+    await close(page);
+  });
+
+  test("a missing wasm package shows a clear error", async () => {
+    const broken = await serve(ROOT, { missing: ["/pkg/"] });
+    try {
+      const page = await open(`${broken.url}www/`);
+      await waitState(page, "error");
+      assert.match(await errorText(page), /Could not load the WebAssembly package.*wasm-pack build/s);
+      await shot(page, "error-no-wasm");
+      await close(page);
+    } finally {
+      await broken.close();
+    }
+  });
+
+  test("a browser without WebAssembly SIMD gets a clear error", async () => {
+    const page = await open(`${server.url}www/`, {
+      init: () => {
+        const validate = WebAssembly.validate;
+        // Reject any module using v128 (the 0x7b value type), like a browser without SIMD.
+        WebAssembly.validate = (bytes) => !new Uint8Array(bytes.buffer ?? bytes).includes(0xfd) && validate(bytes);
+      },
+    });
+    await waitState(page, "error");
+    assert.match(await errorText(page), /SIMD/);
+    await close(page);
+  });
+
+  test("a worker that cannot start shows a clear error", async () => {
+    const broken = await serve(ROOT, { missing: ["/www/worker.js"] });
+    try {
+      const page = await open(`${broken.url}www/`);
+      await waitState(page, "error");
+      assert.match(await errorText(page), /inference worker failed/);
+      await close(page);
+    } finally {
+      await broken.close();
+    }
+  });
+});

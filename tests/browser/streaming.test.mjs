@@ -1,0 +1,106 @@
+// The page's worker API (StreamingModel: encode once, decode in chunks) on the web package
+// itself, under Node: it must give what Model.predict gives, and refuse bad input with a JS
+// Error. Runs with the browser tests (`node --test tests/browser/`), on pkg/ and the shipped weights.
+import assert from "node:assert/strict";
+import { existsSync, readFileSync } from "node:fs";
+import { dirname, join } from "node:path";
+import { before, describe, test } from "node:test";
+import { fileURLToPath, pathToFileURL } from "node:url";
+
+const ROOT = join(dirname(fileURLToPath(import.meta.url)), "..", "..");
+const S = 64;
+let wasm;
+let episode;
+
+before(async () => {
+  assert.ok(existsSync(join(ROOT, "pkg", "dmbn.js")), "no web package in pkg/: build it with `wasm-pack build --release --target web --out-dir pkg --no-typescript`");
+  wasm = await import(pathToFileURL(join(ROOT, "pkg", "dmbn.js")).href);
+  await wasm.default({ module_or_path: readFileSync(join(ROOT, "pkg", "dmbn_bg.wasm")) });
+  episode = wasm.runEpisode("move", 3, S);
+});
+
+const weights = (file) => readFileSync(join(ROOT, "assets", "models", file));
+
+/** Steps `steps` of the episode as model input. */
+function observe(steps) {
+  const px = S * S * 3;
+  const all = episode.frames();
+  const joints = episode.joints();
+  const times = episode.times();
+  return {
+    frames: Uint8Array.from(steps.flatMap((k) => Array.from(all.subarray(k * px, (k + 1) * px)))),
+    joints: Float32Array.from(steps.flatMap((k) => Array.from(joints.subarray(k * 7, k * 7 + 7)))),
+    times: Float32Array.from(steps.map((k) => times[k])),
+  };
+}
+
+function close(a, b, tol, what) {
+  assert.equal(a.length, b.length, `${what}: lengths`);
+  let worst = 0;
+  for (let i = 0; i < a.length; i++) worst = Math.max(worst, Math.abs(a[i] - b[i]));
+  assert.ok(worst <= tol, `${what}: largest difference ${worst} > ${tol}`);
+}
+
+describe("StreamingModel (the page's worker API)", () => {
+  for (const [kind, file] of [["dmbn", "dmbn-sim.dmbn"], ["pte", "pte-sim.dmbn"]]) {
+    test(`${kind}: chunked encode/decode equals Model.predict`, () => {
+      const bytes = weights(file);
+      const model = wasm.Model.fromBytes(bytes);
+      const stream = wasm.StreamingModel.fromBytes(bytes);
+      assert.equal(stream.kind, kind);
+      assert.equal(stream.imageSize, S);
+      const { frames, joints, times } = observe([0, 9, 18, 40, episode.len - 1]);
+      const targets = episode.times();
+      const whole = model.predict(frames, joints, times, targets, 0.5);
+      const encoding = stream.encode(frames, joints, times, 0.5);
+      const parts = [];
+      for (let start = 0; start < targets.length; start += 10) {
+        parts.push(stream.decode(encoding, targets.subarray(start, start + 10)));
+      }
+      const cat = (key, Type) => {
+        const out = new Type(parts.reduce((n, p) => n + p[key].length, 0));
+        let at = 0;
+        for (const p of parts) {
+          out.set(p[key], at);
+          at += p[key].length;
+        }
+        return out;
+      };
+      assert.equal(parts.reduce((n, p) => n + p.len, 0), targets.length);
+      close(cat("jointMean", Float32Array), whole.jointMean(), 1e-4, "joint mean");
+      close(cat("jointSigma", Float32Array), whole.jointSigma(), 1e-4, "joint σ");
+      const means = cat("meanFrames", Uint8Array);
+      const expected = new Uint8Array(targets.length * S * S * 3);
+      for (let k = 0; k < targets.length; k++) expected.set(whole.meanFrame(k), k * S * S * 3);
+      close(means, expected, 1, "mean frames (bytes)");
+      // σ per pixel is the mean over the channels of imageSigma.
+      const sigma3 = whole.imageSigma();
+      const sigma = cat("sigma", Float32Array);
+      close(sigma, Float32Array.from(sigma, (_, i) => (sigma3[3 * i] + sigma3[3 * i + 1] + sigma3[3 * i + 2]) / 3), 1e-4, "pixel σ");
+      const largest = sigma.reduce((m, v) => Math.max(m, v), 0);
+      assert.ok(Math.abs(Math.max(...parts.map((p) => p.maxSigma)) - largest) < 1e-6, "maxSigma");
+      assert.ok(sigma.every((v) => v > 0 && Number.isFinite(v)));
+      encoding.free();
+      whole.free();
+      stream.free();
+      model.free();
+    });
+  }
+
+  test("bad input throws a JS Error", () => {
+    const dmbn = wasm.StreamingModel.fromBytes(weights("dmbn-sim.dmbn"));
+    const pte = wasm.StreamingModel.fromBytes(weights("pte-sim.dmbn"));
+    const { frames, joints, times } = observe([0, 5]);
+    const encoding = dmbn.encode(frames, joints, times, 1);
+    assert.throws(() => pte.decode(encoding, new Float32Array([0.5])), /another model/);
+    assert.throws(() => dmbn.decode(encoding, new Float32Array([NaN])), /finite/);
+    assert.throws(() => dmbn.encode(frames, joints, times, 2), /blend/);
+    assert.throws(() => dmbn.encode(new Uint8Array(0), new Float32Array(0), new Float32Array(0), 0.5), Error);
+    assert.throws(() => dmbn.encode(frames.subarray(1), joints, times, 0.5), /frames/);
+    assert.throws(() => wasm.StreamingModel.fromBytes(new Uint8Array([1, 2, 3, 4])), Error);
+    assert.equal(dmbn.decode(encoding, new Float32Array(0)).len, 0);
+    encoding.free();
+    dmbn.free();
+    pte.free();
+  });
+});

@@ -1,0 +1,252 @@
+// The 7 joint curves as small multiples on one canvas: the true (shown) values, the predicted
+// mean with its ±2σ band as far as the prediction has come, the observed points and a cursor.
+
+export const JOINTS = 7;
+export const JOINT_NAMES = ["base", "shoulder", "elbow", "wrist 1", "wrist 2", "wrist 3", "gripper"];
+export const JOINT_UNITS = ["rad", "rad", "rad", "rad", "rad", "rad", "m"];
+export const JOINT_COLORS = ["#ff6b6b", "#ffa94d", "#ffd43b", "#69db7c", "#4dabf7", "#b197fc", "#f783ac"];
+
+const COLS = 4;
+const ROWS = 2;
+const GAP = { x: 14, y: 12 };
+const PAD = { left: 40, right: 6, top: 18, bottom: 16 };
+const MUTED = "#8b93a3";
+const GRID = "#262b36";
+const TRUE = "#e6e9ef";
+
+/**
+ * Draws into `canvas` (sized from its CSS box at the device pixel ratio).
+ * `data`: {len, joints (T×7 true), observed (sorted steps), step, prediction: null or
+ * {done (Uint8Array T), jointMean, jointSigma}}. Returns a function mapping a client x to a step.
+ */
+export function drawJoints(canvas, data) {
+  const dpr = window.devicePixelRatio || 1;
+  const w = canvas.clientWidth;
+  const h = canvas.clientHeight;
+  if (canvas.width !== Math.round(w * dpr) || canvas.height !== Math.round(h * dpr)) {
+    canvas.width = Math.round(w * dpr);
+    canvas.height = Math.round(h * dpr);
+  }
+  const g = canvas.getContext("2d");
+  g.setTransform(dpr, 0, 0, dpr, 0, 0);
+  g.clearRect(0, 0, w, h);
+  const cw = (w - GAP.x * (COLS - 1)) / COLS;
+  const ch = (h - GAP.y * (ROWS - 1)) / ROWS;
+  const cells = [];
+  for (let j = 0; j < COLS * ROWS; j++) {
+    cells.push({ x: (j % COLS) * (cw + GAP.x), y: Math.floor(j / COLS) * (ch + GAP.y), w: cw, h: ch });
+  }
+  drawLegend(g, cells[JOINTS]);
+  if (!data || data.len < 1) return () => 0;
+  for (let j = 0; j < JOINTS; j++) drawJoint(g, cells[j], j, data);
+  const pw = cw - PAD.left - PAD.right;
+  // Client x → step, using the column under the pointer.
+  return (clientX) => {
+    const rect = canvas.getBoundingClientRect();
+    const x = clientX - rect.left;
+    const col = Math.min(COLS - 1, Math.max(0, Math.floor(x / (cw + GAP.x))));
+    const local = x - col * (cw + GAP.x) - PAD.left;
+    return Math.round((local / pw) * (data.len - 1));
+  };
+}
+
+function drawJoint(g, cell, j, { len, joints, observed, step, prediction }) {
+  const left = cell.x + PAD.left;
+  const right = cell.x + cell.w - PAD.right;
+  const top = cell.y + PAD.top;
+  const bottom = cell.y + cell.h - PAD.bottom;
+  const at = (k) => joints[k * JOINTS + j];
+
+  // y range: the true curve, widened to the predicted band but never beyond 3 true ranges
+  // (an unsure joint would otherwise flatten every other curve).
+  let lo = Infinity;
+  let hi = -Infinity;
+  for (let k = 0; k < len; k++) {
+    lo = Math.min(lo, at(k));
+    hi = Math.max(hi, at(k));
+  }
+  const span = Math.max(hi - lo, j === JOINTS - 1 ? 0.01 : 0.1);
+  const mid = (lo + hi) / 2;
+  let blo = mid - span / 2;
+  let bhi = mid + span / 2;
+  const p = prediction;
+  if (p) {
+    for (let k = 0; k < len; k++) {
+      if (!p.done[k]) continue;
+      const m = p.jointMean[k * JOINTS + j];
+      const s = 2 * p.jointSigma[k * JOINTS + j];
+      blo = Math.min(blo, m - s);
+      bhi = Math.max(bhi, m + s);
+    }
+  }
+  lo = Math.max(blo, mid - 1.5 * span);
+  hi = Math.min(bhi, mid + 1.5 * span);
+  const margin = (hi - lo) * 0.08;
+  lo -= margin;
+  hi += margin;
+  const x = (k) => left + (len > 1 ? (k / (len - 1)) * (right - left) : 0);
+  const y = (v) => bottom - ((v - lo) / (hi - lo)) * (bottom - top);
+
+  // Frame, title, ticks.
+  g.save();
+  g.font = "11px system-ui, sans-serif";
+  g.fillStyle = JOINT_COLORS[j];
+  g.textBaseline = "alphabetic";
+  g.textAlign = "left";
+  g.fillText(`${JOINT_NAMES[j]} (${JOINT_UNITS[j]})`, left, cell.y + 12);
+  g.strokeStyle = GRID;
+  g.lineWidth = 1;
+  g.strokeRect(Math.round(left) + 0.5, Math.round(top) + 0.5, Math.round(right - left), Math.round(bottom - top));
+  g.fillStyle = MUTED;
+  g.font = "10px system-ui, sans-serif";
+  g.textAlign = "right";
+  g.textBaseline = "middle";
+  for (const v of ticks(lo, hi, 3)) {
+    const yy = Math.round(y(v)) + 0.5;
+    g.beginPath();
+    g.moveTo(left, yy);
+    g.lineTo(right, yy);
+    g.stroke();
+    g.fillText(fmt(v), left - 4, yy);
+  }
+  g.textAlign = "center";
+  g.textBaseline = "top";
+  for (const k of [0, len - 1]) g.fillText(String(k), x(k), bottom + 3);
+  g.beginPath();
+  g.rect(left, top, right - left, bottom - top);
+  g.clip();
+
+  // Prediction: ±2σ band and mean, in runs of consecutive predicted steps.
+  if (p) {
+    const runs = [];
+    for (let k = 0; k < len; k++) {
+      if (!p.done[k]) continue;
+      if (runs.length && runs[runs.length - 1][1] === k - 1) runs[runs.length - 1][1] = k;
+      else runs.push([k, k]);
+    }
+    const mean = (k) => p.jointMean[k * JOINTS + j];
+    const sd = (k) => p.jointSigma[k * JOINTS + j];
+    g.fillStyle = JOINT_COLORS[j] + "40";
+    for (const [a, b] of runs) {
+      g.beginPath();
+      for (let k = a; k <= b; k++) g.lineTo(x(k), y(mean(k) + 2 * sd(k)));
+      for (let k = b; k >= a; k--) g.lineTo(x(k), y(mean(k) - 2 * sd(k)));
+      g.closePath();
+      g.fill();
+    }
+    g.strokeStyle = JOINT_COLORS[j];
+    g.lineWidth = 1.8;
+    g.lineJoin = "round";
+    for (const [a, b] of runs) {
+      g.beginPath();
+      for (let k = a; k <= b; k++) g.lineTo(x(k), y(mean(k)));
+      if (a === b) g.lineTo(x(a) + 1, y(mean(a)));
+      g.stroke();
+    }
+  }
+
+  // True curve.
+  g.strokeStyle = TRUE;
+  g.globalAlpha = 0.75;
+  g.lineWidth = 1.2;
+  g.setLineDash([4, 3]);
+  g.beginPath();
+  for (let k = 0; k < len; k++) g.lineTo(x(k), y(at(k)));
+  g.stroke();
+  g.setLineDash([]);
+  g.globalAlpha = 1;
+
+  // Observed points.
+  for (const k of observed) {
+    g.beginPath();
+    g.arc(x(k), y(at(k)), 3.2, 0, 2 * Math.PI);
+    g.fillStyle = "#0f1115";
+    g.fill();
+    g.lineWidth = 1.6;
+    g.strokeStyle = TRUE;
+    g.stroke();
+  }
+
+  // Cursor.
+  const cx = Math.round(x(step)) + 0.5;
+  g.strokeStyle = "rgba(230, 233, 239, 0.55)";
+  g.lineWidth = 1;
+  g.beginPath();
+  g.moveTo(cx, top);
+  g.lineTo(cx, bottom);
+  g.stroke();
+  g.restore();
+}
+
+function drawLegend(g, cell) {
+  if (!cell) return;
+  const items = [
+    ["true (shown)", (x, y) => dashed(g, x, y)],
+    ["predicted mean", (x, y) => line(g, x, y, "#4dabf7", 2)],
+    ["mean ± 2σ", (x, y) => band(g, x, y)],
+    ["observed", (x, y) => dot(g, x + 9, y)],
+  ];
+  g.save();
+  g.font = "12px system-ui, sans-serif";
+  g.textBaseline = "middle";
+  g.textAlign = "left";
+  const x0 = cell.x + PAD.left;
+  const y0 = cell.y + PAD.top + 6;
+  const dy = Math.min(22, (cell.h - PAD.top) / items.length);
+  items.forEach(([label, mark], i) => {
+    const yy = y0 + i * dy;
+    mark(x0, yy);
+    g.fillStyle = MUTED;
+    g.fillText(label, x0 + 26, yy);
+  });
+  g.fillStyle = "#5c6475";
+  g.font = "10px system-ui, sans-serif";
+  g.fillText("x axis: step of the shown sequence", x0, y0 + items.length * dy);
+  g.restore();
+}
+
+function line(g, x, y, color, width) {
+  g.strokeStyle = color;
+  g.lineWidth = width;
+  g.beginPath();
+  g.moveTo(x, y);
+  g.lineTo(x + 18, y);
+  g.stroke();
+}
+
+function dashed(g, x, y) {
+  g.setLineDash([4, 3]);
+  line(g, x, y, TRUE, 1.2);
+  g.setLineDash([]);
+}
+
+function band(g, x, y) {
+  g.fillStyle = "#4dabf740";
+  g.fillRect(x, y - 5, 18, 10);
+}
+
+function dot(g, x, y) {
+  g.beginPath();
+  g.arc(x, y, 3.2, 0, 2 * Math.PI);
+  g.fillStyle = "#0f1115";
+  g.fill();
+  g.lineWidth = 1.6;
+  g.strokeStyle = TRUE;
+  g.stroke();
+}
+
+/** About `n` round tick values within [lo, hi]. */
+function ticks(lo, hi, n) {
+  const raw = (hi - lo) / n;
+  if (!(raw > 0)) return [lo];
+  const p = 10 ** Math.floor(Math.log10(raw));
+  const step = [1, 2, 5, 10].map((m) => m * p).find((s) => raw <= s);
+  const out = [];
+  for (let i = Math.ceil(lo / step); i * step <= hi; i++) out.push(i * step);
+  return out;
+}
+
+function fmt(v) {
+  const r = Math.round(v * 1000) / 1000;
+  return Object.is(r, -0) ? "0" : String(r);
+}

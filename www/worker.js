@@ -1,0 +1,151 @@
+// Inference worker: loads the model files and runs DMBN / DMBN-PTE predictions in WebAssembly,
+// off the page's main thread. The observations are encoded once (StreamingModel.encode), then
+// the target times are decoded in chunks whose results go back as they come, typed arrays
+// transferred (not copied), so the page fills the predicted sequence in progressively.
+//
+// Messages in (all carry an `id`; replies echo it):
+//   {type: "init", module}                  the compiled WebAssembly.Module from the page
+//   {type: "load", kind, url}               fetch and parse a model file (kept for later)
+//   {type: "predict", kind, frames, joints, times, targets, blend, chunk, delay}
+//                                           a new predict cancels the running one
+//   {type: "cancel", target}                stop prediction `target` if it is running
+// Messages out:
+//   {type: "inited", id}
+//   {type: "loaded", id, kind, fileKind, imageSize, bytes, fetchMs, parseMs}
+//   {type: "chunk", id, start, count, mean, sigma, jointMean, jointSigma, ms}
+//   {type: "done", id, ms, encodeMs, steps}
+//   {type: "error", id, message}
+
+let wasm = null;
+let initWasm;
+const wasmReady = new Promise((resolve) => {
+  initWasm = resolve;
+});
+
+/** kind → Promise of {model, url, info}: each file is fetched and parsed once. */
+const models = new Map();
+/** Id of the prediction allowed to run; any other running loop stops at its next chunk. */
+let current = null;
+
+const post = (msg, transfer = []) => self.postMessage(msg, transfer);
+
+self.onmessage = async (e) => {
+  const msg = e.data;
+  try {
+    switch (msg.type) {
+      case "init":
+        await init(msg.module);
+        post({ type: "inited", id: msg.id });
+        break;
+      case "load": {
+        const { info } = await load(msg.kind, msg.url);
+        post({ type: "loaded", id: msg.id, ...info });
+        break;
+      }
+      case "predict":
+        current = msg.id;
+        await predict(msg);
+        break;
+      case "cancel":
+        if (current === msg.target) current = null;
+        break;
+      default:
+        throw new Error(`unknown message ${JSON.stringify(msg.type)}`);
+    }
+  } catch (err) {
+    post({ type: "error", id: msg.id, message: err instanceof Error ? err.message : String(err) });
+  }
+};
+
+async function init(module) {
+  try {
+    wasm = await import("../pkg/dmbn.js");
+    await wasm.default({ module_or_path: module });
+    initWasm();
+  } catch (err) {
+    throw new Error(`The inference worker could not start WebAssembly: ${err.message ?? err}`);
+  }
+}
+
+function load(kind, url) {
+  const cached = models.get(kind);
+  if (cached && cached.url === url) return cached.promise;
+  const promise = fetchModel(kind, url);
+  models.set(kind, { url, promise });
+  // A failed load is not cached: the next request tries again (the file may have appeared).
+  promise.catch(() => {
+    if (models.get(kind)?.promise === promise) models.delete(kind);
+  });
+  return promise;
+}
+
+const NAMES = { dmbn: "DMBN", pte: "DMBN-PTE" };
+
+async function fetchModel(kind, url) {
+  const name = `the ${NAMES[kind] ?? kind} weights`;
+  const t0 = performance.now();
+  let response;
+  try {
+    response = await fetch(url);
+  } catch (err) {
+    throw new Error(`Could not download ${name} from ${url}: ${err.message ?? err}.`);
+  }
+  if (!response.ok) {
+    const hint = response.status === 404 ? " The file is missing: train the model or restore assets/models/." : "";
+    throw new Error(`Could not download ${name} from ${url}: HTTP ${response.status} ${response.statusText}.${hint}`);
+  }
+  const bytes = new Uint8Array(await response.arrayBuffer());
+  const t1 = performance.now();
+  await wasmReady;
+  let model;
+  try {
+    model = wasm.StreamingModel.fromBytes(bytes);
+  } catch (err) {
+    throw new Error(`${name[0].toUpperCase()}${name.slice(1)} at ${url} are corrupt or not a model file: ${err.message ?? err}`);
+  }
+  const info = {
+    kind,
+    fileKind: model.kind,
+    imageSize: model.imageSize,
+    bytes: bytes.length,
+    fetchMs: t1 - t0,
+    parseMs: performance.now() - t1,
+  };
+  return { model, url, info };
+}
+
+/** Lets queued messages (a newer prediction, a cancel) in between two chunks. */
+function yieldToMessages(delay) {
+  return new Promise((resolve) => setTimeout(resolve, delay || 0));
+}
+
+async function predict(msg) {
+  const { id, kind, frames, joints, times, targets, blend } = msg;
+  const entry = models.get(kind);
+  if (!entry) throw new Error(`the ${NAMES[kind] ?? kind} model is not loaded`);
+  const { model } = await entry.promise;
+  if (current !== id) return;
+  const chunk = Math.max(1, msg.chunk | 0);
+  const t0 = performance.now();
+  // The observations are encoded once; each chunk of targets is then only decoded.
+  const encoding = model.encode(frames, joints, times, blend);
+  const encodeMs = performance.now() - t0;
+  try {
+    for (let start = 0; start < targets.length; start += chunk) {
+      if (current !== id) return;
+      const c0 = start === 0 ? t0 : performance.now();
+      // {len, meanFrames (RGB bytes), sigma (per pixel, mean of the channels), jointMean, jointSigma}
+      const p = model.decode(encoding, targets.subarray(start, Math.min(targets.length, start + chunk)));
+      const out = { start, count: p.len, mean: p.meanFrames, sigma: p.sigma, jointMean: p.jointMean, jointSigma: p.jointSigma };
+      out.ms = performance.now() - c0;
+      post({ type: "chunk", id, ...out }, [out.mean.buffer, out.sigma.buffer, out.jointMean.buffer, out.jointSigma.buffer]);
+      await yieldToMessages(msg.delay);
+    }
+  } finally {
+    encoding.free();
+  }
+  if (current === id) {
+    current = null;
+    post({ type: "done", id, ms: performance.now() - t0, encodeMs, steps: targets.length });
+  }
+}
