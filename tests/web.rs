@@ -6,7 +6,9 @@ mod golden;
 #[path = "golden/prediction.rs"]
 mod golden_prediction;
 
-use dmbn::web::{placement_region, run_episode, Episode, ModelHandle, Prediction, Simulator};
+use dmbn::web::{
+    placement_region, run_episode, Episode, ModelHandle, Prediction, Simulator, StreamingModel,
+};
 use wasm_bindgen::{JsError, JsValue};
 use wasm_bindgen_test::wasm_bindgen_test;
 
@@ -259,4 +261,26 @@ fn eval_sequences_t_p_f() {
     assert_eq!(f.frames()[15 * n..16 * n], ep.frames()[10 * n..11 * n]);
     assert_eq!(f.times(), ep.times());
     assert!(message(ep.eval_sequence("x", 0.0, None, None).err().unwrap()).contains("t, p or f"));
+}
+
+#[wasm_bindgen_test]
+fn streaming_model_matches_predict() {
+    let (ep, p) = golden_prediction();
+    let m = StreamingModel::from_bytes(golden_prediction::MODEL).unwrap();
+    let (frames, joints, times) = observed(&ep);
+    let encoding = m
+        .encode(frames, joints, times, golden_prediction::BLEND)
+        .unwrap();
+    let mut joint_mean = vec![];
+    for chunk in ep.times().chunks(10) {
+        let out = m.decode(&encoding, chunk.to_vec()).unwrap();
+        let field = js_sys::Reflect::get(&out, &"jointMean".into()).unwrap();
+        joint_mean.extend(js_sys::Float32Array::from(field).to_vec());
+    }
+    let diff = joint_mean
+        .iter()
+        .zip(p.joint_mean())
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f32::max);
+    assert!(diff < 1e-4, "streaming and predict differ by {diff}");
 }
