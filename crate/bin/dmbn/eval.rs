@@ -1,7 +1,6 @@
 //! `dmbn eval` (a t/p/f sequence reconstructed from K observations: figure, MSE, NLL) and
 //! `dmbn probe` (the time-regression probe: the paper's Table 1).
-use std::fs;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use clap::Args;
 use rand::SeedableRng;
@@ -9,7 +8,6 @@ use rand_pcg::Pcg64;
 use serde::Serialize;
 
 use dmbn::augment::{EvalMode, EvalSequence};
-use dmbn::data::Dataset;
 use dmbn::eval::{evaluate, evenly_spaced, probe, HeadConfig, ProbeConfig};
 use dmbn::figure::{eval_figure, save_png};
 use dmbn::model::ModelKind;
@@ -17,7 +15,7 @@ use dmbn::predict::{Predictor, Scores};
 use dmbn::train::Split;
 
 use crate::cli::CliError;
-use crate::predict::{parse_blend, parse_sequence};
+use crate::predict::{create_dir, load, parse_blend, parse_sequence, write, write_json};
 
 #[derive(Args)]
 pub struct EvalArgs {
@@ -76,13 +74,8 @@ struct EvalReport {
 }
 
 pub fn run_eval(args: EvalArgs) -> Result<(), CliError> {
-    let predictor = Predictor::load(&args.model)?;
-    let dataset = Dataset::open(&args.data)?;
+    let (predictor, seq) = load(&args.model, &args.data, &args.sequence)?;
     let (id, action) = &args.sequence;
-    let seq = dataset.read(
-        dataset.find(*id, action)?,
-        Some(predictor.model().image_size() as u32),
-    )?;
     let mut rng = Pcg64::seed_from_u64(args.seed);
     let shown = EvalSequence::build(args.mode, &seq, args.freeze, &mut rng);
     let observed = evenly_spaced(seq.len(), args.observations as usize);
@@ -200,20 +193,4 @@ pub fn run_probe(args: ProbeArgs) -> Result<(), CliError> {
         args.out.display()
     );
     Ok(())
-}
-
-fn create_dir(dir: &Path) -> Result<(), CliError> {
-    fs::create_dir_all(dir).map_err(|source| CliError::Io {
-        path: dir.to_path_buf(),
-        source,
-    })
-}
-
-fn write(path: &Path, bytes: &[u8]) -> Result<(), CliError> {
-    Ok(dmbn::data::write_atomic(path, bytes)?)
-}
-
-fn write_json(path: &Path, value: &impl Serialize) -> Result<(), CliError> {
-    let json = serde_json::to_vec_pretty(value).map_err(|e| CliError::Usage(e.to_string()))?;
-    write(path, &json)
 }

@@ -66,12 +66,8 @@ struct Report<'a> {
 }
 
 pub fn run(args: PredictArgs) -> Result<(), CliError> {
-    let predictor = Predictor::load(&args.model)?;
-    let dataset = Dataset::open(&args.data)?;
+    let (predictor, seq) = load(&args.model, &args.data, &args.sequence)?;
     let (id, action) = &args.sequence;
-    let seq_ref = dataset.find(*id, action)?;
-    let size = predictor.model().image_size() as u32;
-    let seq = dataset.read(seq_ref, Some(size))?;
     let observations = Observations::from_sequence(&seq, &args.observe)?;
     let prediction = predictor.predict(&observations, &seq.times(), args.blend)?;
     let scores = Scores::of(
@@ -91,8 +87,7 @@ pub fn run(args: PredictArgs) -> Result<(), CliError> {
         steps: seq.len(),
         scores,
     };
-    let json = serde_json::to_vec_pretty(&report).map_err(|e| CliError::Usage(e.to_string()))?;
-    write(&args.out.join("scores.json"), &json)?;
+    write_json(&args.out.join("scores.json"), &report)?;
     println!(
         "{} on {id}/{action} ({} steps), observed {:?}, blend {}",
         report.model,
@@ -115,11 +110,7 @@ fn write_figures(
 ) -> Result<(), CliError> {
     let s = prediction.image_size as u32;
     for dir in ["mean", "sigma", "truth"] {
-        let dir = args.out.join(dir);
-        fs::create_dir_all(&dir).map_err(|source| CliError::Io {
-            path: dir.clone(),
-            source,
-        })?;
+        create_dir(&args.out.join(dir))?;
     }
     let scale = prediction.max_image_sigma();
     let frame = |bytes: Vec<u8>| {
@@ -158,6 +149,35 @@ fn write_figures(
     Ok(())
 }
 
-fn write(path: &Path, bytes: &[u8]) -> Result<(), CliError> {
+/// The model file at `model` and sequence `id`/`action` of the dataset at `data`, read at the
+/// model's frame size (shared by `predict` and `eval`).
+pub(crate) fn load(
+    model: &Path,
+    data: &Path,
+    (id, action): &(u32, String),
+) -> Result<(Predictor, Sequence), CliError> {
+    let predictor = Predictor::load(model)?;
+    let dataset = Dataset::open(data)?;
+    let size = predictor.model().image_size() as u32;
+    let seq = dataset.read(dataset.find(*id, action)?, Some(size))?;
+    Ok((predictor, seq))
+}
+
+/// Creates `dir` and its parents.
+pub(crate) fn create_dir(dir: &Path) -> Result<(), CliError> {
+    fs::create_dir_all(dir).map_err(|source| CliError::Io {
+        path: dir.to_path_buf(),
+        source,
+    })
+}
+
+/// Writes `bytes` at `path` atomically.
+pub(crate) fn write(path: &Path, bytes: &[u8]) -> Result<(), CliError> {
     Ok(dmbn::data::write_atomic(path, bytes)?)
+}
+
+/// Writes `value` as pretty JSON at `path` atomically.
+pub(crate) fn write_json(path: &Path, value: &impl Serialize) -> Result<(), CliError> {
+    let json = serde_json::to_vec_pretty(value).map_err(|e| CliError::Usage(e.to_string()))?;
+    write(path, &json)
 }
