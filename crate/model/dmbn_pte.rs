@@ -2,7 +2,6 @@ use burn::config::Config;
 use burn::module::Module;
 use burn::tensor::{Device, Tensor};
 
-use super::aggregation::{blend, masked_mean};
 use super::config::{decoder_filters, encoder_filters};
 use super::context_projection::{ContextProjection, ContextProjectionConfig};
 use super::decoder::{Decoder, DecoderConfig};
@@ -90,23 +89,12 @@ impl DmbnPte {
 
     /// The blended representation r, `[B, H]`, before any target time is subtracted.
     pub fn encode(&self, batch: &BatchTensors) -> Representation {
-        let z = self.encode_contexts(batch);
-        let r_image = masked_mean(z.image, batch.context_mask.clone());
-        let r_joint = masked_mean(z.joint, batch.context_mask.clone());
-        Representation {
-            r: blend(r_image, r_joint, batch.blend.clone()),
-        }
+        self.encode_contexts(batch).represent(batch)
     }
 
     /// The prediction at `[B, M]` target times: r_target = r − P(t_target).
     pub fn decode(&self, representation: &Representation, target_times: Tensor<2>) -> Prediction {
-        let [b, m] = target_times.dims();
-        let [_, h] = representation.r.dims();
-        let r = representation
-            .r
-            .clone()
-            .unsqueeze_dim::<3>(1)
-            .expand([b, m, h]);
+        let r = representation.per_target(target_times.dims()[1]);
         self.decoder.forward(r - self.time.forward(target_times))
     }
 
