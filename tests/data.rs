@@ -1,5 +1,7 @@
 //! Dataset reading and writing on small hand-made fixtures (no simulator involved), plus a
 //! check of the original DMBN dataset when it is available.
+mod support;
+
 use std::fs;
 use std::path::{Path, PathBuf};
 
@@ -445,19 +447,9 @@ fn inconsistent_sequences_are_not_written() {
     assert_eq!(fs::read_dir(root.path()).unwrap().count(), 0);
 }
 
-/// The original dataset, when present: `$DMBN2020` or `../shared/datasets/dmbn2020`.
-fn dmbn2020() -> Option<PathBuf> {
-    let path = std::env::var_os("DMBN2020")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| {
-            Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/datasets/dmbn2020")
-        });
-    path.is_dir().then_some(path)
-}
-
 #[test]
 fn original_dataset_reads() {
-    let Some(root) = dmbn2020() else {
+    let Some(root) = support::dmbn2020() else {
         println!("note: dmbn2020 not found (set DMBN2020); skipping");
         return;
     };

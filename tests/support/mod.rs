@@ -1,0 +1,22 @@
+//! Helpers shared by the native integration tests (`mod support;`).
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+
+/// The original DMBN dataset, when present: `$DMBN2020` or `../shared/datasets/dmbn2020`.
+/// Tests that need it print a note and pass without it; it is never part of the repository.
+pub fn dmbn2020() -> Option<PathBuf> {
+    let path = std::env::var_os("DMBN2020")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| {
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/datasets/dmbn2020")
+        });
+    path.is_dir().then_some(path)
+}
+
+/// A file of the repository's `assets/`.
+pub fn asset(path: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("assets")
+        .join(path)
+}
