@@ -1,6 +1,8 @@
 // The 7 joint curves as small multiples on one canvas: the true (shown) values, the predicted
 // mean with its ±2σ band as far as the prediction has come, the observed points and a cursor.
 
+import { fit } from "./views.js";
+
 export const JOINTS = 7;
 export const JOINT_NAMES = ["base", "shoulder", "elbow", "wrist 1", "wrist 2", "wrist 3", "gripper"];
 export const JOINT_UNITS = ["rad", "rad", "rad", "rad", "rad", "rad", "m"];
@@ -20,16 +22,7 @@ const TRUE = "#e6e9ef";
  * {done (Uint8Array T), jointMean, jointSigma}}. Returns a function mapping a client x to a step.
  */
 export function drawJoints(canvas, data) {
-  const dpr = window.devicePixelRatio || 1;
-  const w = canvas.clientWidth;
-  const h = canvas.clientHeight;
-  if (canvas.width !== Math.round(w * dpr) || canvas.height !== Math.round(h * dpr)) {
-    canvas.width = Math.round(w * dpr);
-    canvas.height = Math.round(h * dpr);
-  }
-  const g = canvas.getContext("2d");
-  g.setTransform(dpr, 0, 0, dpr, 0, 0);
-  g.clearRect(0, 0, w, h);
+  const { g, w, h } = fit(canvas);
   const cw = (w - GAP.x * (COLS - 1)) / COLS;
   const ch = (h - GAP.y * (ROWS - 1)) / ROWS;
   const cells = [];

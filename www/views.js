@@ -53,7 +53,7 @@ export function clearFrame(canvas) {
 }
 
 /** Sizes a canvas's backing store to its CSS box at the device pixel ratio; returns the context. */
-function fit(canvas) {
+export function fit(canvas) {
   const dpr = window.devicePixelRatio || 1;
   const w = canvas.clientWidth;
   const h = canvas.clientHeight;
