@@ -159,6 +159,8 @@ fn padding_slots_do_not_matter() {
 fn loss_is_finite_and_falls_when_overfitting_one_batch() {
     let device = device().autodiff();
     for kind in ModelKind::ALL {
+        // A fixed initialisation: an unseeded one made the drop vary from run to run.
+        device.seed(7);
         let mut model = model(kind, 64, &device);
         let t = tensors(&batch(1, 2, 2, 64, 4), &device).unwrap();
         let mut optimizer = AdamConfig::new().init();
