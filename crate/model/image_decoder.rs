@@ -1,10 +1,10 @@
 use burn::config::Config;
 use burn::module::Module;
-use burn::nn::conv::{Conv2d, Conv2dConfig};
-use burn::nn::PaddingConfig2d;
+use burn::nn::conv::Conv2d;
 use burn::tensor::activation::{relu, sigmoid};
 use burn::tensor::{Device, Tensor};
 
+use super::feature_map::{is_tracked, new_conv3x3, Activation, FeatureMap, KernelCache};
 use super::gaussian::bounded_sigma;
 
 /// Filters of the two convolutions between the last upsampling block and the heads.
@@ -38,12 +38,9 @@ pub struct ImageDecoder {
     pub sigma: Conv2d,
     /// Lower bound of σ.
     pub sigma_floor: f64,
-}
-
-fn conv3x3(channels: [usize; 2], device: &Device) -> Conv2d {
-    Conv2dConfig::new(channels, [3, 3])
-        .with_padding(PaddingConfig2d::Same)
-        .init(device)
+    /// The inference kernels prepared from the convolutions above.
+    #[module(skip)]
+    pub kernels: KernelCache,
 }
 
 impl ImageDecoderConfig {
@@ -54,7 +51,7 @@ impl ImageDecoderConfig {
             filters
                 .iter()
                 .map(|&f| {
-                    let conv = conv3x3([channels, f], device);
+                    let conv = new_conv3x3([channels, f], device);
                     channels = f;
                     conv
                 })
@@ -65,16 +62,28 @@ impl ImageDecoderConfig {
         ImageDecoder {
             blocks,
             tail,
-            mean: conv3x3([channels, 3], device),
-            sigma: conv3x3([channels, 3], device),
+            mean: new_conv3x3([channels, 3], device),
+            sigma: new_conv3x3([channels, 3], device),
             sigma_floor: self.sigma_floor,
+            kernels: KernelCache::default(),
         }
     }
 }
 
 impl ImageDecoder {
-    /// `[K, input]` to the mean and σ frames, each `[K, 3, S, S]` with S = 2^(blocks + 1).
+    /// `[K, input]` to the mean and σ frames, each `[K, 3, S, S]` with S = 2^(blocks + 1):
+    /// through burn's differentiable layers when training (see [`is_tracked`]), else through the
+    /// faster inference kernels ([`FeatureMap`]); the two agree to float rounding.
     pub fn forward(&self, x: Tensor<2>) -> (Tensor<4>, Tensor<4>) {
+        if is_tracked(&x) || is_tracked(&self.mean.weight.val()) {
+            self.forward_differentiable(x)
+        } else {
+            self.forward_inference(x)
+        }
+    }
+
+    /// [`ImageDecoder::forward`] through burn's layers (autodiff-capable).
+    pub fn forward_differentiable(&self, x: Tensor<2>) -> (Tensor<4>, Tensor<4>) {
         let [k, width] = x.dims();
         let mut x = x.reshape([k, width / 4, 2, 2]);
         for conv in &self.blocks {
@@ -87,6 +96,29 @@ impl ImageDecoder {
         let sigma = bounded_sigma(self.sigma.forward(x), self.sigma_floor);
         (mean, sigma)
     }
+
+    /// [`ImageDecoder::forward`] through the inference kernels: each upsampling is folded into
+    /// the convolution that reads it, and both heads share one product.
+    pub fn forward_inference(&self, x: Tensor<2>) -> (Tensor<4>, Tensor<4>) {
+        let [k, width] = x.dims();
+        let device = x.device();
+        let mut map = FeatureMap::from_channels_first(x.reshape([k, width / 4, 2, 2]));
+        let layers = self.blocks.len() + self.tail.len();
+        for (i, conv) in self.blocks.iter().chain(&self.tail).enumerate() {
+            // Every block's output is upsampled, so the convolution after one reads it so.
+            let upsampled = i > 0 && i <= self.blocks.len();
+            let kernels = self.kernels.get(i, &[conv], map.shape[3], upsampled);
+            map = map.conv3x3(&kernels, Activation::Relu);
+        }
+        let heads = [&self.mean, &self.sigma];
+        let kernels = self.kernels.get(layers, &heads, map.shape[3], false);
+        let mut heads = map
+            .conv3x3(&kernels, Activation::Identity)
+            .into_channels_first(&[3, 3], &device)
+            .into_iter();
+        let (mean, sigma) = (heads.next().expect("mean"), heads.next().expect("σ"));
+        (sigmoid(mean), bounded_sigma(sigma, self.sigma_floor))
+    }
 }
 
 /// Nearest-neighbour upsampling by 2: `[K, C, H, W]` to `[K, C, 2H, 2W]`.
@@ -97,22 +129,41 @@ pub fn upsample2(x: Tensor<4>) -> Tensor<4> {
         .reshape([k, c, 2 * h, 2 * w])
 }
 
-#[cfg(test)]
+#[cfg(all(test, not(target_arch = "wasm32")))]
 mod tests {
     use super::*;
+    use burn::tensor::Distribution;
+
+    fn decoder(device: &Device) -> ImageDecoder {
+        device.seed(5);
+        ImageDecoderConfig::new(vec![16, 8, 8])
+            .with_input(64)
+            .init(device)
+    }
 
     #[test]
-    fn upsample2_repeats_each_pixel() {
+    fn inference_kernels_equal_the_differentiable_layers() {
         let device = Device::flex();
-        let x = Tensor::<4>::from_floats([[[[1.0, 2.0], [3.0, 4.0]]]], &device);
-        let y: Vec<f32> = upsample2(x).into_data().try_to_vec().unwrap();
-        #[rustfmt::skip]
-        let expected = [
-            1.0, 1.0, 2.0, 2.0,
-            1.0, 1.0, 2.0, 2.0,
-            3.0, 3.0, 4.0, 4.0,
-            3.0, 3.0, 4.0, 4.0,
-        ];
-        assert_eq!(y, expected);
+        let decoder = decoder(&device);
+        let x = Tensor::<2>::random([3, 64], Distribution::Normal(0.0, 1.0), &device);
+        let (mean, sigma) = decoder.forward_differentiable(x.clone());
+        let (fast_mean, fast_sigma) = decoder.forward_inference(x.clone());
+        assert_eq!(mean.dims(), [3, 3, 16, 16]);
+        let diff = |a: Tensor<4>, b: Tensor<4>| (a - b).abs().max().into_scalar::<f32>();
+        assert!(diff(mean, fast_mean) < 1e-5);
+        assert!(diff(sigma, fast_sigma) < 1e-5);
+    }
+
+    #[test]
+    fn training_goes_through_the_differentiable_layers() {
+        let device = Device::flex().autodiff();
+        let decoder = decoder(&device);
+        let x = Tensor::<2>::random([2, 64], Distribution::Normal(0.0, 1.0), &device);
+        let (mean, sigma) = decoder.forward(x);
+        let grads = (mean.sum() + sigma.sum()).backward();
+        for conv in decoder.blocks.iter().chain(&decoder.tail) {
+            assert!(conv.weight.grad(&grads).is_some());
+        }
+        assert!(decoder.sigma.weight.grad(&grads).is_some());
     }
 }

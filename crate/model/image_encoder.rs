@@ -1,10 +1,12 @@
 use burn::config::Config;
 use burn::module::Module;
-use burn::nn::conv::{Conv2d, Conv2dConfig};
-use burn::nn::pool::{MaxPool2d, MaxPool2dConfig};
-use burn::nn::{Linear, LinearConfig, PaddingConfig2d};
+use burn::nn::conv::Conv2d;
+use burn::nn::pool::MaxPool2dConfig;
+use burn::nn::{Linear, LinearConfig};
 use burn::tensor::activation::relu;
 use burn::tensor::{Device, Tensor};
+
+use super::feature_map::{is_tracked, new_conv3x3, Activation, FeatureMap, KernelCache};
 
 /// Configuration of an [`ImageEncoder`].
 #[derive(Config, Debug)]
@@ -24,10 +26,11 @@ pub struct ImageEncoderConfig {
 pub struct ImageEncoder {
     /// One 3x3 convolution per block.
     pub convs: Vec<Conv2d>,
-    /// 2x2 max pooling after each convolution.
-    pub pool: MaxPool2d,
     /// Flattened 2x2 feature map to the encoding.
     pub dense: Linear,
+    /// The inference kernels prepared from the convolutions above.
+    #[module(skip)]
+    pub kernels: KernelCache,
 }
 
 impl ImageEncoderConfig {
@@ -38,29 +41,68 @@ impl ImageEncoderConfig {
             .filters
             .iter()
             .map(|&filters| {
-                let conv = Conv2dConfig::new([channels, filters], [3, 3])
-                    .with_padding(PaddingConfig2d::Same)
-                    .init(device);
+                let conv = new_conv3x3([channels, filters], device);
                 channels = filters;
                 conv
             })
             .collect();
         ImageEncoder {
             convs,
-            pool: MaxPool2dConfig::new([2, 2]).init(),
             dense: LinearConfig::new(channels * 4, self.hidden).init(device),
+            kernels: KernelCache::default(),
         }
     }
 }
 
 impl ImageEncoder {
-    /// `[K, C, S, S]` frames (S = 2^(blocks + 1)) to `[K, H]` encodings.
+    /// `[K, C, S, S]` frames (S = 2^(blocks + 1)) to `[K, H]` encodings: through burn's
+    /// differentiable layers when training (see [`is_tracked`]), else through the inference kernels
+    /// ([`FeatureMap`]).
     pub fn forward(&self, images: Tensor<4>) -> Tensor<2> {
-        let mut x = images;
-        for conv in &self.convs {
-            x = self.pool.forward(relu(conv.forward(x)));
-        }
+        let tracked = self.convs.first().map(|c| is_tracked(&c.weight.val()));
+        let x = if is_tracked(&images) || tracked.unwrap_or(false) {
+            let pool = MaxPool2dConfig::new([2, 2]).init();
+            self.convs
+                .iter()
+                .fold(images, |x, conv| pool.forward(relu(conv.forward(x))))
+        } else {
+            let device = images.device();
+            let mut map = FeatureMap::from_channels_first(images);
+            for (i, conv) in self.convs.iter().enumerate() {
+                let kernels = self.kernels.get(i, &[conv], map.shape[3], false);
+                map = map.conv3x3(&kernels, Activation::Relu).max_pool2();
+            }
+            let c = map.shape[3];
+            map.into_channels_first(&[c], &device).remove(0)
+        };
         let [k, c, h, w] = x.dims();
         relu(self.dense.forward(x.reshape([k, c * h * w])))
+    }
+}
+
+#[cfg(all(test, not(target_arch = "wasm32")))]
+mod tests {
+    use super::*;
+    use burn::tensor::Distribution;
+
+    fn encoder(device: &Device) -> ImageEncoder {
+        device.seed(6);
+        ImageEncoderConfig::new(4, vec![8, 16, 16]).init(device)
+    }
+
+    #[test]
+    fn inference_kernels_equal_the_differentiable_layers_and_training_reaches_the_convs() {
+        let device = Device::flex();
+        let frames = Tensor::<4>::random([3, 4, 16, 16], Distribution::Default, &device);
+        let fast = encoder(&device).forward(frames.clone());
+        let ad = Device::flex().autodiff();
+        let encoder = encoder(&ad);
+        let tracked = encoder.forward(Tensor::from_data(frames.into_data(), &ad));
+        let diff: f32 = (tracked.clone().inner() - fast).abs().max().into_scalar();
+        assert!(diff < 1e-5, "{diff}");
+        let grads = tracked.sum().backward();
+        for conv in &encoder.convs {
+            assert!(conv.weight.grad(&grads).is_some());
+        }
     }
 }

@@ -10,13 +10,14 @@
 //!
 //! [`Batch`]: crate::augment::Batch
 mod aggregation;
-mod batch_tensors;
+pub mod batch_tensors;
 mod config;
 mod context_projection;
 mod decoder;
 mod dmbn;
 mod dmbn_pte;
 mod error;
+mod feature_map;
 pub mod file;
 mod gaussian;
 mod image_decoder;
@@ -38,6 +39,7 @@ pub use decoder::{Decoder, DecoderConfig};
 pub use dmbn::{Dmbn, DmbnConfig};
 pub use dmbn_pte::{DmbnPte, DmbnPteConfig};
 pub use error::ModelError;
+pub use feature_map::{new_conv3x3, Activation, FeatureMap, KernelCache, Kernels};
 #[cfg(not(target_arch = "wasm32"))]
 pub use file::{load, load_expecting, save};
 pub use file::{load_bytes, load_bytes_expecting, read_header, save_bytes, ModelHeader};
