@@ -21,12 +21,12 @@ if ! "$venv/bin/python" -c "import torch" 2>/dev/null; then
 fi
 
 say "burn native (flex), $threads threads"
-native=$(cargo bench --bench model 2>/dev/null | tee /dev/stderr | sed -n 's/^json: //p')
+native=$(cargo bench --bench model 2>/dev/null | tee -a /dev/stderr | sed -n 's/^json: //p')
 say "pytorch, $threads threads"
-torch=$("$venv/bin/python" bench/torch_dmbn.py --threads "$threads" | tee /dev/stderr)
+torch=$("$venv/bin/python" bench/torch_dmbn.py --threads "$threads" | tee -a /dev/stderr)
 say "burn wasm (node, simd128)"
 wasm-pack build --release --target nodejs --out-dir pkg-node --no-typescript >/dev/null 2>&1
-wasm=$(node bench/model.mjs | tee /dev/stderr | sed -n 's/^json: //p')
+wasm=$(node bench/model.mjs | tee -a /dev/stderr | sed -n 's/^json: //p')
 
 python3 - "$native" "$torch" "$wasm" <<'PY'
 import json, sys

@@ -6,9 +6,7 @@ mod golden;
 #[path = "golden/prediction.rs"]
 mod golden_prediction;
 
-use dmbn::web::{
-    placement_region, run_episode, Episode, ModelHandle, Prediction, Simulator, StreamingModel,
-};
+use dmbn::web::{placement_region, run_episode, Episode, ModelHandle, Prediction, Simulator};
 use wasm_bindgen::{JsError, JsValue};
 use wasm_bindgen_test::wasm_bindgen_test;
 
@@ -264,9 +262,9 @@ fn eval_sequences_t_p_f() {
 }
 
 #[wasm_bindgen_test]
-fn streaming_model_matches_predict() {
+fn encode_then_decode_in_chunks_matches_predict() {
     let (ep, p) = golden_prediction();
-    let m = StreamingModel::from_bytes(golden_prediction::MODEL).unwrap();
+    let m = ModelHandle::from_bytes(golden_prediction::MODEL).unwrap();
     let (frames, joints, times) = observed(&ep);
     let encoding = m
         .encode(frames, joints, times, golden_prediction::BLEND)
@@ -282,5 +280,5 @@ fn streaming_model_matches_predict() {
         .zip(p.joint_mean())
         .map(|(a, b)| (a - b).abs())
         .fold(0.0, f32::max);
-    assert!(diff < 1e-4, "streaming and predict differ by {diff}");
+    assert!(diff < 1e-4, "encode/decode and predict differ by {diff}");
 }

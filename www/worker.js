@@ -1,5 +1,5 @@
 // Inference worker: loads the model files and runs DMBN / DMBN-PTE predictions in WebAssembly,
-// off the page's main thread. The observations are encoded once (StreamingModel.encode), then
+// off the page's main thread. The observations are encoded once (Model.encode), then
 // the target times are decoded in chunks whose results go back as they come, typed arrays
 // transferred (not copied), so the page fills the predicted sequence in progressively.
 //
@@ -99,7 +99,7 @@ async function fetchModel(kind, url) {
   await wasmReady;
   let model;
   try {
-    model = wasm.StreamingModel.fromBytes(bytes);
+    model = wasm.Model.fromBytes(bytes);
   } catch (err) {
     throw new Error(`${name[0].toUpperCase()}${name.slice(1)} at ${url} are corrupt or not a model file: ${err.message ?? err}`);
   }

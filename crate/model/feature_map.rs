@@ -249,24 +249,43 @@ fn gather_patches(
     rows: usize,
 ) {
     let row_len = taps.len() * c;
-    // A run of pixels in one input row at a time: each tap's row is checked once per run.
+    // Taps next to each other in one input row read neighbouring pixels, which lie side by
+    // side in both the input and the patch: copy each such segment (first tap, offsets, taps)
+    // at once where it lies inside the frame.
+    let mut segments: Vec<(usize, isize, isize, usize)> = Vec::with_capacity(taps.len());
+    for (t, &(dy, dx)) in taps.iter().enumerate() {
+        match segments.last_mut() {
+            Some((_, sy, sx, n)) if *sy == dy && *sx + *n as isize == dx => *n += 1,
+            _ => segments.push((t, dy, dx, 1)),
+        }
+    }
+    // A run of pixels in one input row at a time: each segment's row is checked once per run.
     let mut r = 0;
     while r < rows {
         let p = first + r;
         let (f, i, j0) = (p / (h * w), p / w % h, p % w);
         let run = (w - j0).min(rows - r);
-        for (t, &(dy, dx)) in taps.iter().enumerate() {
+        for &(t, dy, dx, n) in &segments {
             let y = i as isize + dy;
-            let inside = (0..h as isize).contains(&y);
+            let row_inside = (0..h as isize).contains(&y);
             let base = (f * h + y.max(0) as usize) * w;
             for jj in 0..run {
                 let x = (j0 + jj) as isize + dx;
-                let dst = &mut col[(r + jj) * row_len + t * c..][..c];
-                if inside && (0..w as isize).contains(&x) {
+                let dst = &mut col[(r + jj) * row_len + t * c..][..n * c];
+                if row_inside && x >= 0 && x + n as isize <= w as isize {
                     let at = (base + x as usize) * c;
-                    dst.copy_from_slice(&input[at..at + c]);
+                    dst.copy_from_slice(&input[at..at + n * c]);
                 } else {
-                    dst.fill(0.0);
+                    // At the frame's edge: tap by tap.
+                    for (k, d) in dst.chunks_exact_mut(c).enumerate() {
+                        let x = x + k as isize;
+                        if row_inside && (0..w as isize).contains(&x) {
+                            let at = (base + x as usize) * c;
+                            d.copy_from_slice(&input[at..at + c]);
+                        } else {
+                            d.fill(0.0);
+                        }
+                    }
                 }
             }
         }

@@ -1,12 +1,21 @@
+use std::sync::atomic::{AtomicU32, Ordering};
+
 use wasm_bindgen::prelude::*;
 
+use super::encoding::{decoded_object, Encoding};
 use crate::predict::{Observations, Predictor, SequencePrediction};
 
+/// Tells models apart, so an encoding is only ever decoded by the model that made it.
+static NEXT_ID: AtomicU32 = AtomicU32::new(1);
+
 /// A trained DMBN or DMBN-PTE for inference in the browser: `Model.fromBytes(bytes)`, then
-/// `predict(...)`. Wraps [`Predictor`], the same code the native `dmbn predict` runs.
+/// `predict(...)` in one call, or, as the demo page's worker does, `encode(...)` the
+/// observations once and `decode(...)` target times in as many chunks as wanted. Wraps
+/// [`Predictor`], the same code the native `dmbn predict` runs.
 #[wasm_bindgen(js_name = Model)]
 pub struct ModelHandle {
     inner: Predictor,
+    id: u32,
 }
 
 #[wasm_bindgen(js_class = Model)]
@@ -16,6 +25,7 @@ impl ModelHandle {
     pub fn from_bytes(bytes: &[u8]) -> Result<ModelHandle, JsError> {
         Ok(ModelHandle {
             inner: Predictor::from_bytes(bytes)?,
+            id: NEXT_ID.fetch_add(1, Ordering::Relaxed),
         })
     }
 
@@ -43,15 +53,56 @@ impl ModelHandle {
         #[wasm_bindgen(js_name = targetTimes)] target_times: Vec<f32>,
         blend: f32,
     ) -> Result<Prediction, JsError> {
-        let observations = Observations {
+        let observations = self.observations(frames, joints, times);
+        Ok(Prediction {
+            inner: self.inner.predict(&observations, &target_times, blend)?,
+        })
+    }
+
+    /// Encodes N observed steps, with the arguments of `predict` (without the target times),
+    /// for `decode`. Throws on bad input.
+    pub fn encode(
+        &self,
+        frames: Vec<u8>,
+        joints: Vec<f32>,
+        times: Vec<f32>,
+        blend: f32,
+    ) -> Result<Encoding, JsError> {
+        let observations = self.observations(frames, joints, times);
+        Ok(Encoding {
+            inner: self.inner.encode(&observations, blend)?,
+            model: self.id,
+        })
+    }
+
+    /// The prediction at `targetTimes` (a `Float32Array(M)` of finite phases) from `encoding`,
+    /// as `{len, meanFrames, sigma, jointMean, jointSigma, maxSigma}`: `meanFrames` a
+    /// `Uint8Array(M × S × S × 3)` of RGB mean frames, `sigma` a `Float32Array(M × S × S)` of
+    /// per-pixel σ (the mean over the 3 channels, what the σ heat maps show), `maxSigma` its
+    /// largest value, `jointMean` / `jointSigma` `Float32Array(M × 7)` in the episode's units.
+    /// Throws when `encoding` comes from another model or a time is not finite.
+    pub fn decode(
+        &self,
+        encoding: &Encoding,
+        #[wasm_bindgen(js_name = targetTimes)] target_times: Vec<f32>,
+    ) -> Result<JsValue, JsError> {
+        if encoding.model != self.id {
+            return Err(JsError::new(
+                "this encoding was made by another model: encode the observations with this one",
+            ));
+        }
+        decoded_object(&self.inner.decode(&encoding.inner, &target_times)?)
+    }
+}
+
+impl ModelHandle {
+    fn observations(&self, frames: Vec<u8>, joints: Vec<f32>, times: Vec<f32>) -> Observations {
+        Observations {
             image_size: self.image_size(),
             frames,
             joints,
             times,
-        };
-        Ok(Prediction {
-            inner: self.inner.predict(&observations, &target_times, blend)?,
-        })
+        }
     }
 }
 

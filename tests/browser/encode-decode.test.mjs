@@ -1,4 +1,4 @@
-// The page's worker API (StreamingModel: encode once, decode in chunks) on the web package
+// The page's worker API (Model.encode once, Model.decode in chunks) on the web package
 // itself, under Node: it must give what Model.predict gives, and refuse bad input with a JS
 // Error. Runs with the browser tests (`node --test tests/browser/`), on pkg/ and the shipped weights.
 import assert from "node:assert/strict";
@@ -41,12 +41,13 @@ function close(a, b, tol, what) {
   assert.ok(worst <= tol, `${what}: largest difference ${worst} > ${tol}`);
 }
 
-describe("StreamingModel (the page's worker API)", () => {
+describe("Model.encode / Model.decode (the page's worker API)", () => {
   for (const [kind, file] of [["dmbn", "dmbn-sim.dmbn"], ["pte", "pte-sim.dmbn"]]) {
     test(`${kind}: chunked encode/decode equals Model.predict`, () => {
       const bytes = weights(file);
       const model = wasm.Model.fromBytes(bytes);
-      const stream = wasm.StreamingModel.fromBytes(bytes);
+      // A second instance of the same weights: encode/decode need not be the predicting one.
+      const stream = wasm.Model.fromBytes(bytes);
       assert.equal(stream.kind, kind);
       assert.equal(stream.imageSize, S);
       const { frames, joints, times } = observe([0, 9, 18, 40, episode.len - 1]);
@@ -88,8 +89,8 @@ describe("StreamingModel (the page's worker API)", () => {
   }
 
   test("bad input throws a JS Error", () => {
-    const dmbn = wasm.StreamingModel.fromBytes(weights("dmbn-sim.dmbn"));
-    const pte = wasm.StreamingModel.fromBytes(weights("pte-sim.dmbn"));
+    const dmbn = wasm.Model.fromBytes(weights("dmbn-sim.dmbn"));
+    const pte = wasm.Model.fromBytes(weights("pte-sim.dmbn"));
     const { frames, joints, times } = observe([0, 5]);
     const encoding = dmbn.encode(frames, joints, times, 1);
     assert.throws(() => pte.decode(encoding, new Float32Array([0.5])), /another model/);
@@ -97,7 +98,7 @@ describe("StreamingModel (the page's worker API)", () => {
     assert.throws(() => dmbn.encode(frames, joints, times, 2), /blend/);
     assert.throws(() => dmbn.encode(new Uint8Array(0), new Float32Array(0), new Float32Array(0), 0.5), Error);
     assert.throws(() => dmbn.encode(frames.subarray(1), joints, times, 0.5), /frames/);
-    assert.throws(() => wasm.StreamingModel.fromBytes(new Uint8Array([1, 2, 3, 4])), Error);
+    assert.throws(() => wasm.Model.fromBytes(new Uint8Array([1, 2, 3, 4])), Error);
     assert.equal(dmbn.decode(encoding, new Float32Array(0)).len, 0);
     encoding.free();
     dmbn.free();
