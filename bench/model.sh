@@ -21,12 +21,16 @@ if ! "$venv/bin/python" -c "import torch" 2>/dev/null; then
 fi
 
 say "burn native (flex), $threads threads"
-native=$(cargo bench --bench model 2>/dev/null | tee -a /dev/stderr | sed -n 's/^json: //p')
+# Each part's output is shown as it is, and its `json:` line kept for the summary (no tee to
+# /dev/stderr: reopening it would truncate a log that stdout and stderr share).
+out=$(cargo bench --bench model 2>/dev/null); echo "$out"
+native=$(sed -n 's/^json: //p' <<<"$out")
 say "pytorch, $threads threads"
-torch=$("$venv/bin/python" bench/torch_dmbn.py --threads "$threads" | tee -a /dev/stderr)
+torch=$("$venv/bin/python" bench/torch_dmbn.py --threads "$threads"); echo "$torch"
 say "burn wasm (node, simd128)"
 wasm-pack build --release --target nodejs --out-dir pkg-node --no-typescript >/dev/null 2>&1
-wasm=$(node bench/model.mjs | tee -a /dev/stderr | sed -n 's/^json: //p')
+out=$(node bench/model.mjs); echo "$out"
+wasm=$(sed -n 's/^json: //p' <<<"$out")
 
 python3 - "$native" "$torch" "$wasm" <<'PY'
 import json, sys
