@@ -547,6 +547,12 @@ mod tests {
         let got = got.into_channels_first(&[4], &device).remove(0);
         assert!(max_abs_diff(got, b.forward(x)) < 1e-5);
         assert!(!Arc::ptr_eq(&other, &cache.get(0, &[&b], 3, true)));
+        // No frames at all (a prediction of no target times) is an empty map, not a panic.
+        let empty = FeatureMap {
+            data: Vec::new(),
+            shape: [0, 4, 4, 3],
+        };
+        assert_eq!(empty.conv3x3(&other, Activation::Relu).shape, [0, 4, 4, 4]);
     }
 
     #[test]
