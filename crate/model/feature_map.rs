@@ -13,6 +13,7 @@
 use burn::nn::conv::{Conv2d, Conv2dConfig};
 use burn::nn::PaddingConfig2d;
 use burn::tensor::{Device, Tensor, TensorData};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 
 /// Floats of patches gathered per tile: keeps a tile (and its product) in the L2 cache.
@@ -100,12 +101,34 @@ impl Kernels {
 
 /// Prepared convolutions kept by an image network, one slot per layer: preparing the kernels
 /// costs about a tenth of a decode, so they are prepared once and reused while the weights
-/// they came from stay the same (compared exactly on each use; training or loading other
-/// weights prepares them anew).
-#[derive(Clone, Debug, Default)]
-pub struct KernelCache(Arc<Mutex<Vec<Option<Arc<Kernels>>>>>);
+/// they came from stay the same: compared exactly on each use (training or loading other
+/// weights prepares them anew) unless the owner has promised, with
+/// [`KernelCache::freeze`], that they never change. A copy of the network (a clone, as burn
+/// makes for `valid()` or before an update) starts with an empty cache of its own.
+#[derive(Debug, Default)]
+pub struct KernelCache {
+    slots: Mutex<Vec<Option<Arc<Kernels>>>>,
+    frozen: AtomicBool,
+}
+
+impl Clone for KernelCache {
+    fn clone(&self) -> Self {
+        KernelCache::default()
+    }
+}
 
 impl KernelCache {
+    /// Promises that the network's weights will not change any more (its owner only ever
+    /// reads it, as a [`Predictor`](crate::predict::Predictor) does), so prepared kernels are
+    /// reused without comparing the weights: a one-target prediction spends a quarter of its
+    /// time on that comparison otherwise.
+    /// Kernels prepared before are dropped: they may come from earlier weights.
+    pub fn freeze(&self) {
+        let mut slots = self.slots.lock().unwrap_or_else(|e| e.into_inner());
+        slots.clear();
+        self.frozen.store(true, Ordering::Relaxed);
+    }
+
     /// The kernels of `convs` in `slot`, prepared now if the slot is empty or holds others.
     pub fn get(
         &self,
@@ -114,11 +137,16 @@ impl KernelCache {
         c_in: usize,
         upsampled: bool,
     ) -> Arc<Kernels> {
-        let (weights, bias) = Kernels::read(convs, c_in);
-        let mut slots = self.0.lock().unwrap_or_else(|e| e.into_inner());
+        let mut slots = self.slots.lock().unwrap_or_else(|e| e.into_inner());
         if slots.len() <= slot {
             slots.resize(slot + 1, None);
         }
+        if let Some(k) = &slots[slot] {
+            if k.upsampled == upsampled && self.frozen.load(Ordering::Relaxed) {
+                return k.clone();
+            }
+        }
+        let (weights, bias) = Kernels::read(convs, c_in);
         if let Some(k) = &slots[slot] {
             if k.upsampled == upsampled && k.weights == weights && k.bias == bias {
                 return k.clone();
@@ -546,7 +574,16 @@ mod tests {
         let got = map.conv3x3(&other, Activation::Identity);
         let got = got.into_channels_first(&[4], &device).remove(0);
         assert!(max_abs_diff(got, b.forward(x)) < 1e-5);
-        assert!(!Arc::ptr_eq(&other, &cache.get(0, &[&b], 3, true)));
+        let upsampled = cache.get(0, &[&b], 3, true);
+        assert!(!Arc::ptr_eq(&other, &upsampled));
+        // Frozen, the slot's kernels stand whatever weights are passed (the owner promised no
+        // change); a copy of the cache starts empty.
+        cache.freeze();
+        let frozen = cache.get(0, &[&b], 3, true);
+        assert!(!Arc::ptr_eq(&upsampled, &frozen), "freezing starts afresh");
+        assert!(Arc::ptr_eq(&frozen, &cache.get(0, &[&a], 3, true)));
+        let copy = cache.clone();
+        assert!(!Arc::ptr_eq(&frozen, &copy.get(0, &[&b], 3, true)));
         // No frames at all (a prediction of no target times) is an empty map, not a panic.
         let empty = FeatureMap {
             data: Vec::new(),

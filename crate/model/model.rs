@@ -64,6 +64,19 @@ impl Model {
         &self.config
     }
 
+    /// Promises that the weights will not change any more, so the image networks' inference
+    /// kernels are reused without comparing weights (see [`KernelCache::freeze`]).
+    ///
+    /// [`KernelCache::freeze`]: super::KernelCache::freeze
+    pub fn freeze_kernels(&self) {
+        let (encoder, decoder) = match &self.network {
+            Network::Dmbn(n) => (&n.image_encoder, &n.decoder),
+            Network::Pte(n) => (&n.image_encoder, &n.decoder),
+        };
+        encoder.kernels.freeze();
+        decoder.image.kernels.freeze();
+    }
+
     /// DMBN or DMBN-PTE.
     pub fn kind(&self) -> ModelKind {
         self.config.kind

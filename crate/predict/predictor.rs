@@ -20,7 +20,9 @@ impl Predictor {
     pub const CHUNK: usize = 25;
 
     /// A predictor for `model`, which must live on `Device::flex()`, trained with `normalization`.
+    /// The predictor only reads the model, so its inference kernels are frozen.
     pub fn new(model: Model, normalization: Normalization) -> Self {
+        model.freeze_kernels();
         Predictor {
             model,
             normalization,
