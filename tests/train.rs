@@ -4,6 +4,7 @@
 #![cfg(not(target_arch = "wasm32"))]
 
 use std::path::Path;
+use std::sync::Mutex;
 
 use dmbn::data::DatasetWriter;
 use dmbn::model::ModelKind;
@@ -47,6 +48,14 @@ fn metrics(out: &Path) -> Vec<Metrics> {
         .collect()
 }
 
+/// Trainers seed burn's generator, which the tests running beside each other share: they are
+/// built one at a time, so each run's weights come from its seed alone.
+fn new_trainer(data: &Path, out: &Path, config: TrainConfig) -> Result<Trainer, TrainError> {
+    static TURN: Mutex<()> = Mutex::new(());
+    let _turn = TURN.lock().unwrap_or_else(|e| e.into_inner());
+    Trainer::new(data, out, config)
+}
+
 #[test]
 fn loss_falls_when_overfitting_a_tiny_dataset() {
     let tmp = tempfile::tempdir().unwrap();
@@ -59,7 +68,7 @@ fn loss_falls_when_overfitting_a_tiny_dataset() {
         config.val_fraction = 0.0;
         config.val_every = 30;
         config.checkpoint_every = 30;
-        let mut trainer = Trainer::new(&data, &out, config).unwrap();
+        let mut trainer = new_trainer(&data, &out, config).unwrap();
         let path = trainer.run(false, |_| {}).unwrap();
         assert!(path.exists());
         let m = metrics(&out);
@@ -76,13 +85,13 @@ fn resume_reproduces_the_uninterrupted_run() {
     let data = tmp.path().join("data");
     dataset(&data, 3);
     let whole = tmp.path().join("whole");
-    Trainer::new(&data, &whole, small(ModelKind::Pte, 6))
+    new_trainer(&data, &whole, small(ModelKind::Pte, 6))
         .unwrap()
         .run(false, |_| {})
         .unwrap();
 
     let parts = tmp.path().join("parts");
-    Trainer::new(&data, &parts, small(ModelKind::Pte, 4))
+    new_trainer(&data, &parts, small(ModelKind::Pte, 4))
         .unwrap()
         .run(false, |_| {})
         .unwrap();
@@ -123,7 +132,7 @@ fn non_finite_loss_stops_and_keeps_the_last_checkpoint() {
     config.lr = 1e30;
     config.clip_norm = 1e30;
     config.checkpoint_every = 1;
-    let mut trainer = Trainer::new(&data, &out, config).unwrap();
+    let mut trainer = new_trainer(&data, &out, config).unwrap();
     let err = trainer.run(false, |_| {}).unwrap_err();
     let TrainError::NonFinite { step, .. } = err else {
         panic!("expected a non-finite loss, got {err}")
@@ -146,12 +155,12 @@ fn bad_settings_are_refused() {
     let out = tmp.path().join("out");
     let mut config = small(ModelKind::Dmbn, 5);
     config.batch = 0;
-    let err = Trainer::new(&data, &out, config).err().unwrap();
+    let err = new_trainer(&data, &out, config).err().unwrap();
     assert!(err.to_string().contains("batch"), "{err}");
     let mut config = small(ModelKind::Dmbn, 5);
     config.image_size = 100;
-    assert!(Trainer::new(&data, &out, config).is_err());
-    let err = Trainer::new(&tmp.path().join("missing"), &out, small(ModelKind::Dmbn, 5))
+    assert!(new_trainer(&data, &out, config).is_err());
+    let err = new_trainer(&tmp.path().join("missing"), &out, small(ModelKind::Dmbn, 5))
         .err()
         .unwrap();
     assert!(err.to_string().contains("missing"), "{err}");

@@ -1,4 +1,4 @@
-use burn::module::Module;
+use burn::module::{Module, ModuleVisitor, Param};
 use burn::tensor::{Device, Tensor};
 
 use super::dmbn::{Dmbn, DmbnConfig};
@@ -62,6 +62,19 @@ impl Model {
     /// The config the model was built from.
     pub fn config(&self) -> &ModelConfig {
         &self.config
+    }
+
+    /// Draws every weight now. burn draws a fresh model's weights lazily, on first use, from a
+    /// generator shared by every thread; drawing them right after seeding makes the seed alone
+    /// decide them.
+    pub fn draw_weights(&self) {
+        struct Draw;
+        impl ModuleVisitor for Draw {
+            fn visit_float<const D: usize>(&mut self, param: &Param<Tensor<D>>) {
+                let _ = param.val();
+            }
+        }
+        self.visit(&mut Draw);
     }
 
     /// Promises that the weights will not change any more, so the image networks' inference

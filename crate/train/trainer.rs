@@ -59,6 +59,7 @@ impl Trainer {
         let device = training_device();
         device.seed(config.seed);
         let model = model_config(&config).init(&device)?;
+        model.draw_weights();
         let log = MetricsLog::open(&out.join("metrics.jsonl"), Some(0))?;
         let rng = Pcg64::seed_from_u64(config.seed);
         let optim = optimizer(&config);
