@@ -449,11 +449,9 @@ fn inconsistent_sequences_are_not_written() {
 
 #[test]
 fn original_dataset_reads() {
-    let Some(root) = support::dmbn2020() else {
-        println!("note: dmbn2020 not found (set DMBN2020); skipping");
+    let Some(dataset) = support::dmbn2020_dataset() else {
         return;
     };
-    let dataset = Dataset::open(&root).unwrap();
     assert_eq!(dataset.ids(), (0..40).collect::<Vec<u32>>());
     assert_eq!(dataset.actions(), vec!["grasp", "move"]);
     assert_eq!(dataset.len(), 80);

@@ -93,11 +93,9 @@ fn mean_mse(model: &Predictor, data: &Dataset, ids: &[u32]) -> (f64, f64) {
 /// and its joints better than the action-independent mean (MSE 1 in standardised units).
 #[test]
 fn original_data_weights_reconstruct_held_out_sequences() {
-    let Some(root) = support::dmbn2020() else {
-        println!("note: dmbn2020 not found (set DMBN2020); skipping");
+    let Some(data) = support::dmbn2020_dataset() else {
         return;
     };
-    let data = Dataset::open(&root).unwrap();
     for name in ["dmbn-2020", "pte-2020", "pte-aug-2020"] {
         let (image, joint) = mean_mse(&shipped(name), &data, &[38, 39]);
         println!("{name}: image MSE {image:.4}, joint MSE {joint:.3}");

@@ -55,7 +55,6 @@ pub struct Kernels {
     bias: Vec<f32>,
     upsampled: bool,
     passes: Vec<Pass>,
-    stride: usize,
 }
 
 impl Kernels {
@@ -88,13 +87,21 @@ impl Kernels {
 
     fn prepare(weights: Vec<Vec<f32>>, bias: Vec<f32>, c_in: usize, upsampled: bool) -> Self {
         let c_outs: Vec<usize> = weights.iter().map(|w| w.len() / (9 * c_in)).collect();
-        let (passes, stride) = passes(&weights, &c_outs, c_in, upsampled);
+        let passes = passes(&weights, &c_outs, c_in, upsampled);
         Kernels {
             weights,
             bias,
             upsampled,
             passes,
-            stride,
+        }
+    }
+
+    /// Output pixels per input pixel along each axis: 2 when the input is read upsampled.
+    fn stride(&self) -> usize {
+        if self.upsampled {
+            2
+        } else {
+            1
         }
     }
 }
@@ -122,6 +129,7 @@ impl KernelCache {
     /// reads it, as a [`Predictor`](crate::predict::Predictor) does), so prepared kernels are
     /// reused without comparing the weights: a one-target prediction spends a quarter of its
     /// time on that comparison otherwise.
+    ///
     /// Kernels prepared before are dropped: they may come from earlier weights.
     pub fn freeze(&self) {
         let mut slots = self.slots.lock().unwrap_or_else(|e| e.into_inner());
@@ -196,14 +204,9 @@ type Tap = ((isize, isize), Vec<usize>);
 
 /// The passes of the convolutions `weights` (each `[C_out, C_in, 3, 3]`, C_out in `c_outs`; their
 /// outputs side by side), reading the input directly or, with `upsampled`, its nearest 2×
-/// upsampling. Returns the passes and the output stride.
+/// upsampling.
 #[inline(never)]
-fn passes(
-    weights: &[Vec<f32>],
-    c_outs: &[usize],
-    c_in: usize,
-    upsampled: bool,
-) -> (Vec<Pass>, usize) {
+fn passes(weights: &[Vec<f32>], c_outs: &[usize], c_in: usize, upsampled: bool) -> Vec<Pass> {
     // Per pass: its phase and its taps.
     let layouts: Vec<((usize, usize), Vec<Tap>)> = if upsampled {
         let mut all = Vec::with_capacity(4);
@@ -253,7 +256,7 @@ fn passes(
         }
         column += c_out;
     }
-    let passes = layouts
+    layouts
         .into_iter()
         .zip(kernels)
         .map(|((phase, taps), kernel)| Pass {
@@ -261,8 +264,7 @@ fn passes(
             kernel,
             phase,
         })
-        .collect();
-    (passes, if upsampled { 2 } else { 1 })
+        .collect()
 }
 
 /// Fills the rows of `col` with the patches (the input at `taps` around each pixel, zero
@@ -448,7 +450,7 @@ impl FeatureMap {
     /// `activation`.
     pub fn conv3x3(&self, kernels: &Kernels, activation: Activation) -> Self {
         let [k, h, w, c] = self.shape;
-        let (passes, stride, bias) = (&kernels.passes, kernels.stride, &kernels.bias);
+        let (passes, stride, bias) = (&kernels.passes, kernels.stride(), &kernels.bias);
         let c_out = bias.len();
         debug_assert_eq!(
             kernels.weights.iter().map(Vec::len).sum::<usize>(),
@@ -515,19 +517,13 @@ impl FeatureMap {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::upsample2;
     use burn::nn::pool::MaxPool2dConfig;
     use burn::tensor::Distribution;
 
     fn max_abs_diff(a: Tensor<4>, b: Tensor<4>) -> f32 {
         assert_eq!(a.dims(), b.dims());
         (a - b).abs().max().into_scalar()
-    }
-
-    fn upsample2(x: Tensor<4>) -> Tensor<4> {
-        let [k, c, h, w] = x.dims();
-        x.reshape([k, c, h, 1, w, 1])
-            .expand([k, c, h, 2, w, 2])
-            .reshape([k, c, 2 * h, 2 * w])
     }
 
     #[test]

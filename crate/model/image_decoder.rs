@@ -142,6 +142,21 @@ mod tests {
     }
 
     #[test]
+    fn upsample2_repeats_each_pixel() {
+        let device = Device::flex();
+        let x = Tensor::<4>::from_floats([[[[1.0, 2.0], [3.0, 4.0]]]], &device);
+        let y: Vec<f32> = upsample2(x).into_data().try_to_vec().unwrap();
+        #[rustfmt::skip]
+        let expected = [
+            1.0, 1.0, 2.0, 2.0,
+            1.0, 1.0, 2.0, 2.0,
+            3.0, 3.0, 4.0, 4.0,
+            3.0, 3.0, 4.0, 4.0,
+        ];
+        assert_eq!(y, expected);
+    }
+
+    #[test]
     fn inference_kernels_equal_the_differentiable_layers() {
         let device = Device::flex();
         let decoder = decoder(&device);

@@ -10,7 +10,7 @@
 //!
 //! [`Batch`]: crate::augment::Batch
 mod aggregation;
-pub mod batch_tensors;
+mod batch_tensors;
 mod config;
 mod context_projection;
 mod decoder;

@@ -14,6 +14,16 @@ pub fn dmbn2020() -> Option<PathBuf> {
     path.is_dir().then_some(path)
 }
 
+/// The original DMBN dataset opened, or `None` after printing the note that the test using it
+/// passes without it.
+pub fn dmbn2020_dataset() -> Option<dmbn::data::Dataset> {
+    let Some(root) = dmbn2020() else {
+        println!("note: dmbn2020 not found (set DMBN2020); skipping");
+        return None;
+    };
+    Some(dmbn::data::Dataset::open(&root).unwrap())
+}
+
 /// A file of the repository's `assets/`.
 pub fn asset(path: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
