@@ -7,9 +7,10 @@
 //! (im2col) and multiplies each tile by the kernel with `gemm` (the library flex itself
 //! uses). A convolution of a nearest-upsampled map reads the low-resolution map directly and
 //! uses the four 2×2 kernels the upsampling collapses the 3×3 kernel into, one per output
-//! phase: 4 taps instead of 9, the same sums. Inference only: training goes through burn's
-//! differentiable `conv2d` (see the `forward_differentiable` methods), and tests hold the two
-//! paths equal.
+//! phase: 4 taps instead of 9, the same sums. Training runs the same kernels through
+//! `conv_op` (burn autodiff operations), with their gradients here: the same patches and
+//! products, transposed. Tests hold both paths equal to burn's own layers, values and
+//! gradients.
 use burn::nn::conv::{Conv2d, Conv2dConfig};
 use burn::nn::PaddingConfig2d;
 use burn::tensor::{Device, Tensor, TensorData};
@@ -18,6 +19,10 @@ use std::sync::{Arc, Mutex};
 
 /// Floats of patches gathered per tile: keeps a tile (and its product) in the L2 cache.
 const TILE_FLOATS: usize = 1 << 17;
+
+/// Pixels per part of a weight gradient's sum (see [`Kernels::weight_gradients`]).
+#[cfg(not(target_arch = "wasm32"))]
+const PART_PIXELS: usize = 1024;
 
 /// A stack of K feature maps, `[K, H, W, C]` in row-major order (channels last).
 #[derive(Clone, Debug, PartialEq)]
@@ -45,6 +50,10 @@ struct Pass {
     taps: Vec<(isize, isize)>,
     kernel: Vec<f32>,
     phase: (usize, usize),
+    /// Per tap, the 3×3 kernel cells (ky·3 + kx) summed into it: how its gradient reaches the
+    /// weights (training only: not read in wasm).
+    #[cfg_attr(target_arch = "wasm32", allow(dead_code))]
+    cells: Vec<Vec<usize>>,
 }
 
 /// Convolutions prepared for [`FeatureMap::conv3x3`]: their passes and biases, with the
@@ -53,6 +62,7 @@ struct Pass {
 pub struct Kernels {
     weights: Vec<Vec<f32>>,
     bias: Vec<f32>,
+    c_in: usize,
     upsampled: bool,
     passes: Vec<Pass>,
 }
@@ -85,14 +95,44 @@ impl Kernels {
         Self::prepare(weights, bias, c_in, upsampled)
     }
 
-    fn prepare(weights: Vec<Vec<f32>>, bias: Vec<f32>, c_in: usize, upsampled: bool) -> Self {
+    pub(super) fn prepare(
+        weights: Vec<Vec<f32>>,
+        bias: Vec<f32>,
+        c_in: usize,
+        upsampled: bool,
+    ) -> Self {
         let c_outs: Vec<usize> = weights.iter().map(|w| w.len() / (9 * c_in)).collect();
         let passes = passes(&weights, &c_outs, c_in, upsampled);
         Kernels {
             weights,
             bias,
+            c_in,
             upsampled,
             passes,
+        }
+    }
+
+    /// These convolutions (see [`FeatureMap::conv3x3`]) of the `[K, H, W, C]` map `input`.
+    pub fn apply(&self, input: &[f32], shape: [usize; 4], activation: Activation) -> FeatureMap {
+        debug_assert_eq!(shape[3], self.c_in);
+        let [k, h, w, _] = shape;
+        let grid = Grid {
+            size: [h, w],
+            scale: 1,
+        };
+        let stride = self.stride();
+        let data = convolve(
+            input,
+            shape,
+            grid,
+            &self.passes,
+            stride,
+            &self.bias,
+            activation,
+        );
+        FeatureMap {
+            data,
+            shape: [k, stride * h, stride * w, self.bias.len()],
         }
     }
 
@@ -180,16 +220,11 @@ pub fn new_conv3x3(channels: [usize; 2], device: &Device) -> Conv2d {
 }
 
 /// Whether `x` takes part in an autodiff graph (it is trained, or computed from what is):
-/// such tensors go through burn's differentiable layers, everything else through the kernels
-/// here. Without autodiff (wasm) nothing is tracked.
+/// such tensors go through the differentiable operations of `conv_op`, everything else
+/// straight through the kernels here. Native only: wasm has no autodiff.
+#[cfg(not(target_arch = "wasm32"))]
 pub fn is_tracked<const D: usize>(x: &Tensor<D>) -> bool {
-    #[cfg(not(target_arch = "wasm32"))]
-    return x.is_tracked();
-    #[cfg(target_arch = "wasm32")]
-    {
-        let _ = x;
-        false
-    }
+    x.is_tracked()
 }
 
 fn values<const D: usize>(t: Tensor<D>) -> Vec<f32> {
@@ -237,43 +272,61 @@ fn passes(weights: &[Vec<f32>], c_outs: &[usize], c_in: usize, upsampled: bool) 
         vec![((0, 0), taps)]
     };
     let c_total: usize = c_outs.iter().sum();
-    let mut kernels: Vec<Vec<f32>> = layouts
-        .iter()
-        .map(|(_, taps)| vec![0.0; taps.len() * c_in * c_total])
-        .collect();
-    let mut column = 0;
-    for (weight, c_out) in weights.iter().zip(c_outs) {
-        for o in 0..*c_out {
-            for i in 0..c_in {
-                let w = &weight[(o * c_in + i) * 9..][..9];
-                for ((_, taps), kernel) in layouts.iter().zip(&mut kernels) {
-                    for (t, (_, cells)) in taps.iter().enumerate() {
-                        kernel[(t * c_in + i) * c_total + column + o] =
-                            cells.iter().map(|&cell| w[cell]).sum();
-                    }
-                }
-            }
-        }
-        column += c_out;
+    // Which weight (and its first column) each output column comes from.
+    let mut columns = Vec::with_capacity(c_total);
+    for (weight, &c_out) in weights.iter().zip(c_outs) {
+        columns.extend((0..c_out).map(|o| (weight, o)));
     }
+    // One kernel row (tap, input channel) per task: training prepares the kernels at every
+    // step.
+    let kernels: Vec<Vec<f32>> = layouts
+        .iter()
+        .map(|(_, taps)| {
+            let mut kernel = vec![0.0; taps.len() * c_in * c_total];
+            for_each_chunk(&mut kernel, c_total.max(1), |row, kernel_row| {
+                let (cells, i) = (&taps[row / c_in].1, row % c_in);
+                for (k, &(weight, o)) in kernel_row.iter_mut().zip(&columns) {
+                    let w = &weight[(o * c_in + i) * 9..][..9];
+                    *k = cells.iter().map(|&cell| w[cell]).sum();
+                }
+            });
+            kernel
+        })
+        .collect();
     layouts
         .into_iter()
         .zip(kernels)
-        .map(|((phase, taps), kernel)| Pass {
-            taps: taps.into_iter().map(|(offset, _)| offset).collect(),
-            kernel,
-            phase,
+        .map(|((phase, taps), kernel)| {
+            let (taps, cells) = taps.into_iter().unzip();
+            Pass {
+                taps,
+                kernel,
+                phase,
+                cells,
+            }
         })
         .collect()
 }
 
-/// Fills the rows of `col` with the patches (the input at `taps` around each pixel, zero
-/// outside the frame) of the `rows` pixels from pixel index `first` of the `[K, H, W, C]` map.
+/// Where a convolution reads: grid pixel (i, j) of frame f (grid `[K, H, W]`, pixels counted
+/// row-major across frames) reads the input at (scale·i + dy, scale·j + dx) for each tap.
+#[derive(Clone, Copy, Debug)]
+struct Grid {
+    size: [usize; 2],
+    scale: usize,
+}
+
+/// Fills the rows of `col` with the patches (the `[K, H, W, C]` input at `taps` around each
+/// grid pixel, zero outside the frame) of the `rows` grid pixels from pixel index `first`.
 #[inline(never)]
 fn gather_patches(
     col: &mut [f32],
     input: &[f32],
     [_, h, w, c]: [usize; 4],
+    Grid {
+        size: [gh, gw],
+        scale,
+    }: Grid,
     taps: &[(isize, isize)],
     first: usize,
     rows: usize,
@@ -289,18 +342,18 @@ fn gather_patches(
             _ => segments.push((t, dy, dx, 1)),
         }
     }
-    // A run of pixels in one input row at a time: each segment's row is checked once per run.
+    // A run of pixels in one grid row at a time: each segment's row is checked once per run.
     let mut r = 0;
     while r < rows {
         let p = first + r;
-        let (f, i, j0) = (p / (h * w), p / w % h, p % w);
-        let run = (w - j0).min(rows - r);
+        let (f, i, j0) = (p / (gh * gw), p / gw % gh, p % gw);
+        let run = (gw - j0).min(rows - r);
         for &(t, dy, dx, n) in &segments {
-            let y = i as isize + dy;
+            let y = (scale * i) as isize + dy;
             let row_inside = (0..h as isize).contains(&y);
-            let base = (f * h + y.max(0) as usize) * w;
+            let base = (f * h + y.clamp(0, h as isize - 1) as usize) * w;
             for jj in 0..run {
-                let x = (j0 + jj) as isize + dx;
+                let x = (scale * (j0 + jj)) as isize + dx;
                 let dst = &mut col[(r + jj) * row_len + t * c..][..n * c];
                 if row_inside && x >= 0 && x + n as isize <= w as isize {
                     let at = (base + x as usize) * c;
@@ -351,9 +404,33 @@ fn write_rows(
     }
 }
 
-/// `out = lhs · rhs` for row-major `lhs` `[m, k]`, `rhs` `[k, n]`, `out` `[m, n]`.
-fn matmul(out: &mut [f32], lhs: &[f32], rhs: &[f32], m: usize, k: usize, n: usize) {
+/// `out = lhs · rhs` (or `out += lhs · rhs` with `accumulate`) for row-major `rhs` `[k, n]` and
+/// `out` `[m, n]`, and `lhs` `[m, k]` row-major or, with `lhs_transposed`, stored as `[k, m]`;
+/// split over the workers with `parallel` (natively).
+fn matmul(
+    out: &mut [f32],
+    lhs: &[f32],
+    rhs: &[f32],
+    [m, k, n]: [usize; 3],
+    (lhs_transposed, accumulate, parallel): (bool, bool, bool),
+) {
+    #[cfg(not(target_arch = "wasm32"))]
+    let parallelism = if parallel {
+        gemm::Parallelism::Rayon(workers())
+    } else {
+        gemm::Parallelism::None
+    };
+    #[cfg(target_arch = "wasm32")]
+    let parallelism = {
+        let _ = parallel;
+        gemm::Parallelism::None
+    };
     assert!(out.len() >= m * n && lhs.len() >= m * k && rhs.len() >= k * n);
+    let (lhs_cs, lhs_rs) = if lhs_transposed {
+        (m as isize, 1)
+    } else {
+        (1, k as isize)
+    };
     // SAFETY: the bounds above cover every element gemm reads or writes with these strides.
     unsafe {
         gemm::gemm(
@@ -363,26 +440,26 @@ fn matmul(out: &mut [f32], lhs: &[f32], rhs: &[f32], m: usize, k: usize, n: usiz
             out.as_mut_ptr(),
             1,
             n as isize,
-            false,
+            accumulate,
             lhs.as_ptr(),
-            1,
-            k as isize,
+            lhs_cs,
+            lhs_rs,
             rhs.as_ptr(),
             1,
             n as isize,
-            0.0,
+            if accumulate { 1.0 } else { 0.0 },
             1.0,
             false,
             false,
             false,
-            gemm::Parallelism::None,
+            parallelism,
         );
     }
 }
 
 /// Runs `f(index, chunk)` over `chunk`-sized pieces of `out`, in parallel natively (wasm has
 /// no threads).
-fn for_each_chunk(out: &mut [f32], chunk: usize, f: impl Fn(usize, &mut [f32]) + Send + Sync) {
+fn for_each_chunk<T: Send>(out: &mut [T], chunk: usize, f: impl Fn(usize, &mut [T]) + Send + Sync) {
     #[cfg(not(target_arch = "wasm32"))]
     {
         use rayon::prelude::*;
@@ -394,11 +471,256 @@ fn for_each_chunk(out: &mut [f32], chunk: usize, f: impl Fn(usize, &mut [f32]) +
     out.chunks_mut(chunk).enumerate().for_each(|(i, c)| f(i, c));
 }
 
+/// A `len`-long vector filled by `f(index, chunk)` over `chunk`-sized pieces (as
+/// [`for_each_chunk`]), each piece zeroed first by the worker that fills it: zeroing all of it
+/// up front took a tenth of a training step, on one thread.
+fn zeroed_chunks(
+    len: usize,
+    chunk: usize,
+    f: impl Fn(usize, &mut [f32]) + Send + Sync,
+) -> Vec<f32> {
+    let mut out: Vec<f32> = Vec::with_capacity(len);
+    for_each_chunk(
+        &mut out.spare_capacity_mut()[..len],
+        chunk.max(1),
+        |i, piece| {
+            piece.iter_mut().for_each(|x| {
+                x.write(0.0);
+            });
+            // SAFETY: every element of the piece was just initialised, and MaybeUninit<f32> has
+            // the layout of f32.
+            let piece = unsafe {
+                std::slice::from_raw_parts_mut(piece.as_mut_ptr().cast::<f32>(), piece.len())
+            };
+            f(i, piece)
+        },
+    );
+    // SAFETY: the pieces cover the first `len` elements, each initialised above.
+    unsafe { out.set_len(len) };
+    out
+}
+
 fn workers() -> usize {
     #[cfg(not(target_arch = "wasm32"))]
     return rayon::current_num_threads();
     #[cfg(target_arch = "wasm32")]
     1
+}
+
+/// The gradients of a convolution, for training (see `conv_op`): the same patches and products
+/// as the forward pass, transposed.
+#[cfg(not(target_arch = "wasm32"))]
+impl Kernels {
+    /// Output channels.
+    pub fn c_out(&self) -> usize {
+        self.bias.len()
+    }
+
+    /// The gradient w.r.t. the `[K, H, W, C_in]` input from `grad`, the gradient w.r.t. the
+    /// output before the activation (`[K, s·H, s·W, C_out]`, s = 2 when upsampled): a
+    /// convolution of `grad` with the transposed kernels at the mirrored offsets.
+    pub fn input_gradient(&self, grad: &[f32], grad_shape: [usize; 4]) -> Vec<f32> {
+        let s = self.stride();
+        let grid = Grid {
+            size: [grad_shape[1] / s, grad_shape[2] / s],
+            scale: s,
+        };
+        let pass = self.input_gradient_pass();
+        let zeros = vec![0.0; self.c_in];
+        convolve(
+            grad,
+            grad_shape,
+            grid,
+            &[pass],
+            1,
+            &zeros,
+            Activation::Identity,
+        )
+    }
+
+    /// Output pixel (s·i + phase) read input pixel (i + tap) through the block of (phase, tap),
+    /// so input pixel (a, b) receives from output pixel (s·a + phase − s·tap) through its
+    /// transpose: one pass of taps at those offsets (distinct: 9 plain, 16 upsampled), in
+    /// row-major order so that neighbouring taps are copied together.
+    fn input_gradient_pass(&self) -> Pass {
+        let (s, c_in, c_out) = (self.stride() as isize, self.c_in, self.c_out());
+        let mut blocks: Vec<((isize, isize), Vec<f32>)> = Vec::new();
+        for pass in &self.passes {
+            let phase = (pass.phase.0 as isize, pass.phase.1 as isize);
+            for (t, &(dy, dx)) in pass.taps.iter().enumerate() {
+                let mut block = vec![0.0; c_out * c_in];
+                for i in 0..c_in {
+                    let row = &pass.kernel[(t * c_in + i) * c_out..][..c_out];
+                    for (o, &v) in row.iter().enumerate() {
+                        block[o * c_in + i] = v;
+                    }
+                }
+                blocks.push(((phase.0 - s * dy, phase.1 - s * dx), block));
+            }
+        }
+        blocks.sort_by_key(|(offset, _)| *offset);
+        Pass {
+            taps: blocks.iter().map(|(offset, _)| *offset).collect(),
+            kernel: blocks.into_iter().flat_map(|(_, block)| block).collect(),
+            phase: (0, 0),
+            cells: Vec::new(),
+        }
+    }
+
+    /// The gradients w.r.t. the weights (`[C_out, C_in, 3, 3]`, flat) and the bias from the
+    /// `[K, H, W, C_in]` input and `grad` (as for [`Kernels::input_gradient`]): per pass, its
+    /// patches transposed times the gradient of the pixels it wrote, summed over the tiles of
+    /// each worker, then over workers, then onto the kernel cells each tap summed.
+    pub fn weight_gradients(
+        &self,
+        input: &[f32],
+        shape: [usize; 4],
+        grad: &[f32],
+        grad_shape: [usize; 4],
+    ) -> (Vec<f32>, Vec<f32>) {
+        use rayon::prelude::*;
+        let ([k, h, w, c_in], c_out, s) = (shape, self.c_out(), self.stride());
+        let pixels = k * h * w;
+        // Parts of a fixed size, summed in order: the gradients do not depend on the number of
+        // threads or on how rayon splits the work (a resumed training repeats the same losses).
+        // With fewer parts than workers, each product is split over the workers instead.
+        let per_part = PART_PIXELS;
+        let parallel = pixels.div_ceil(per_part) < workers();
+        // Per part: per pass, patchesᵀ · gradient; and the gradient's sum over its pixels (each
+        // pixel is written by one pass: the bias gradient).
+        let parts: Vec<(Vec<Vec<f32>>, Vec<f32>)> = (0..pixels.div_ceil(per_part))
+            .into_par_iter()
+            .map(|part| {
+                let (from, to) = (part * per_part, ((part + 1) * per_part).min(pixels));
+                let (mut col, mut g) = (Vec::new(), Vec::new());
+                let mut bias = vec![0.0; c_out];
+                let grid = |scale| Grid {
+                    size: [h, w],
+                    scale,
+                };
+                let sums = self
+                    .passes
+                    .iter()
+                    .map(|pass| {
+                        let row_len = pass.taps.len() * c_in;
+                        let tile = (TILE_FLOATS / row_len).clamp(16, 1024);
+                        col.resize(tile * row_len, 0.0);
+                        g.resize(tile * c_out, 0.0);
+                        let written = [(pass.phase.0 as isize, pass.phase.1 as isize)];
+                        let mut sum = vec![0.0; row_len * c_out];
+                        for start in (from..to).step_by(tile) {
+                            let rows = tile.min(to - start);
+                            let taps = &pass.taps;
+                            gather_patches(&mut col, input, shape, grid(1), taps, start, rows);
+                            gather_patches(
+                                &mut g,
+                                grad,
+                                grad_shape,
+                                grid(s),
+                                &written,
+                                start,
+                                rows,
+                            );
+                            let size = [row_len, rows, c_out];
+                            matmul(&mut sum, &col, &g, size, (true, true, parallel));
+                            for px in g[..rows * c_out].chunks_exact(c_out) {
+                                bias.iter_mut().zip(px).for_each(|(b, &v)| *b += v);
+                            }
+                        }
+                        sum
+                    })
+                    .collect::<Vec<_>>();
+                (sums, bias)
+            })
+            .collect();
+        let mut parts = parts.into_iter();
+        let (sums, bias) = parts
+            .next()
+            .map(|first| {
+                parts.fold(first, |(mut sums, mut bias), (other, other_bias)| {
+                    for (sum, other) in sums.iter_mut().zip(&other) {
+                        sum.iter_mut().zip(other).for_each(|(a, &b)| *a += b);
+                    }
+                    bias.iter_mut().zip(&other_bias).for_each(|(a, &b)| *a += b);
+                    (sums, bias)
+                })
+            })
+            .unwrap_or_else(|| {
+                // No pixels at all.
+                let sums = self
+                    .passes
+                    .iter()
+                    .map(|p| vec![0.0; p.taps.len() * c_in * c_out]);
+                (sums.collect(), vec![0.0; c_out])
+            });
+        // Onto the kernel cells each tap summed, one output channel per task.
+        let mut weight = vec![0.0; c_out * c_in * 9];
+        weight
+            .par_chunks_mut(c_in * 9)
+            .enumerate()
+            .for_each(|(o, weight)| {
+                for (pass, sum) in self.passes.iter().zip(&sums) {
+                    for (t, cells) in pass.cells.iter().enumerate() {
+                        for i in 0..c_in {
+                            let v = sum[(t * c_in + i) * c_out + o];
+                            for &cell in cells {
+                                weight[i * 9 + cell] += v;
+                            }
+                        }
+                    }
+                }
+            });
+        (weight, bias)
+    }
+}
+
+/// The passes of a convolution over `grid` of the `[K, H, W, C]` `input`: each pass writes
+/// output pixel (stride·i + phase) of grid pixel (i, j), `[K, stride·H_grid, stride·W_grid,
+/// C_out]` in all, plus `bias` and `activation`.
+fn convolve(
+    input: &[f32],
+    shape: [usize; 4],
+    grid: Grid,
+    passes: &[Pass],
+    stride: usize,
+    bias: &[f32],
+    activation: Activation,
+) -> Vec<f32> {
+    let (k, [h, w], c, c_out) = (shape[0], grid.size, shape[3], bias.len());
+    let ow = stride * w;
+    // Each worker takes a run of grid rows (across frames), which writes a contiguous run of
+    // output rows.
+    let rows_per_chunk = (k * h).div_ceil(workers()).max(1);
+    zeroed_chunks(
+        k * stride * h * ow * c_out,
+        rows_per_chunk * stride * ow * c_out,
+        |chunk, out| {
+            let first_pixel = chunk * rows_per_chunk * w;
+            let pixels = out.len() / (stride * ow * c_out) * w;
+            let mut col = Vec::new();
+            let mut product = Vec::new();
+            for pass in passes {
+                let row_len = pass.taps.len() * c;
+                let tile = (TILE_FLOATS / row_len).clamp(16, 1024);
+                col.resize(tile * row_len, 0.0);
+                product.resize(tile * c_out, 0.0);
+                for start in (0..pixels).step_by(tile) {
+                    let rows = tile.min(pixels - start);
+                    let first = first_pixel + start;
+                    gather_patches(&mut col, input, shape, grid, &pass.taps, first, rows);
+                    matmul(
+                        &mut product,
+                        &col,
+                        &pass.kernel,
+                        [rows, row_len, c_out],
+                        (false, false, false),
+                    );
+                    let at = (start, w, stride, pass.phase);
+                    write_rows(out, &product[..rows * c_out], bias, at, ow, activation);
+                }
+            }
+        },
+    )
 }
 
 impl FeatureMap {
@@ -449,69 +771,94 @@ impl FeatureMap {
     /// of this map or, if they were prepared so, of its nearest 2× upsampling, followed by
     /// `activation`.
     pub fn conv3x3(&self, kernels: &Kernels, activation: Activation) -> Self {
-        let [k, h, w, c] = self.shape;
-        let (passes, stride, bias) = (&kernels.passes, kernels.stride(), &kernels.bias);
-        let c_out = bias.len();
-        debug_assert_eq!(
-            kernels.weights.iter().map(Vec::len).sum::<usize>(),
-            9 * c * c_out
-        );
-        let (oh, ow) = (stride * h, stride * w);
-        let mut out = vec![0.0; k * oh * ow * c_out];
-        // Each worker takes a run of input rows (across frames), which writes a contiguous run
-        // of output rows.
-        let rows_per_chunk = (k * h).div_ceil(workers()).max(1);
-        let input = &self.data;
-        for_each_chunk(
-            &mut out,
-            rows_per_chunk * stride * ow * c_out,
-            |chunk, out| {
-                let first_pixel = chunk * rows_per_chunk * w;
-                let pixels = out.len() / (stride * ow * c_out) * w;
-                let mut col = Vec::new();
-                let mut product = Vec::new();
-                for pass in passes {
-                    let row_len = pass.taps.len() * c;
-                    let tile = (TILE_FLOATS / row_len).clamp(16, 1024);
-                    col.resize(tile * row_len, 0.0);
-                    product.resize(tile * c_out, 0.0);
-                    for start in (0..pixels).step_by(tile) {
-                        let rows = tile.min(pixels - start);
-                        let first = first_pixel + start;
-                        gather_patches(&mut col, input, self.shape, &pass.taps, first, rows);
-                        matmul(&mut product, &col, &pass.kernel, rows, row_len, c_out);
-                        let at = (start, w, stride, pass.phase);
-                        write_rows(out, &product[..rows * c_out], bias, at, ow, activation);
-                    }
-                }
-            },
-        );
-        FeatureMap {
-            data: out,
-            shape: [k, oh, ow, c_out],
-        }
+        kernels.apply(&self.data, self.shape, activation)
     }
 
     /// 2×2 max pooling with stride 2.
     pub fn max_pool2(&self) -> Self {
-        let [k, h, w, c] = self.shape;
-        let (oh, ow) = (h / 2, w / 2);
-        let mut out = vec![0.0; k * oh * ow * c];
-        for (o, dst) in out.chunks_exact_mut(c).enumerate() {
-            let (f, i, j) = (o / (oh * ow), o / ow % oh, o % ow);
-            let at = |y: usize, x: usize| &self.data[((f * h + y) * w + x) * c..][..c];
-            let (a, b) = (at(2 * i, 2 * j), at(2 * i, 2 * j + 1));
-            let (d, e) = (at(2 * i + 1, 2 * j), at(2 * i + 1, 2 * j + 1));
-            let max = |x: f32, y: f32| if x > y { x } else { y };
+        self.max_pool2_indexed().0
+    }
+
+    /// 2×2 max pooling with stride 2, and for each output value which of its four inputs
+    /// (row-major, the first of equals) it came from: where its gradient goes.
+    pub fn max_pool2_indexed(&self) -> (Self, Vec<u8>) {
+        max_pool2_indexed(&self.data, self.shape)
+    }
+}
+
+/// [`FeatureMap::max_pool2_indexed`] of the `[K, H, W, C]` map `input`.
+pub fn max_pool2_indexed(input: &[f32], [k, h, w, c]: [usize; 4]) -> (FeatureMap, Vec<u8>) {
+    let (oh, ow) = (h / 2, w / 2);
+    let mut out = vec![0.0; k * oh * ow * c];
+    let mut from = vec![0u8; out.len()];
+    // One output row per task.
+    let pool_row = |row: usize, (out, from): (&mut [f32], &mut [u8])| {
+        let (f, i) = (row / oh, row % oh);
+        for (j, (dst, idx)) in out
+            .chunks_exact_mut(c)
+            .zip(from.chunks_exact_mut(c))
+            .enumerate()
+        {
+            let at = |y: usize, x: usize| &input[((f * h + y) * w + x) * c..][..c];
+            let quad = [
+                at(2 * i, 2 * j),
+                at(2 * i, 2 * j + 1),
+                at(2 * i + 1, 2 * j),
+                at(2 * i + 1, 2 * j + 1),
+            ];
             for ch in 0..c {
-                dst[ch] = max(max(a[ch], b[ch]), max(d[ch], e[ch]));
+                let (mut best, mut which) = (quad[0][ch], 0);
+                for (q, v) in quad.iter().enumerate().skip(1) {
+                    if v[ch] > best {
+                        (best, which) = (v[ch], q as u8);
+                    }
+                }
+                dst[ch] = best;
+                idx[ch] = which;
             }
         }
-        FeatureMap {
-            data: out,
-            shape: [k, oh, ow, c],
-        }
+    };
+    let row = (ow * c).max(1);
+    #[cfg(not(target_arch = "wasm32"))]
+    {
+        use rayon::prelude::*;
+        let rows = out.par_chunks_mut(row).zip(from.par_chunks_mut(row));
+        rows.enumerate().for_each(|(r, chunks)| pool_row(r, chunks));
     }
+    #[cfg(target_arch = "wasm32")]
+    {
+        let rows = out.chunks_mut(row).zip(from.chunks_mut(row));
+        rows.enumerate().for_each(|(r, chunks)| pool_row(r, chunks));
+    }
+    let map = FeatureMap {
+        data: out,
+        shape: [k, oh, ow, c],
+    };
+    (map, from)
+}
+
+/// The gradient w.r.t. the `[K, H, W, C]` input of [`FeatureMap::max_pool2_indexed`] from the
+/// gradient `grad` w.r.t. its output and the `from` indices it returned.
+#[cfg(not(target_arch = "wasm32"))]
+pub fn max_pool2_gradient(grad: &[f32], from: &[u8], [k, h, w, c]: [usize; 4]) -> Vec<f32> {
+    use rayon::prelude::*;
+    let ow = w / 2;
+    let mut input = vec![0.0; k * h * w * c];
+    // Each output row spreads onto two input rows: one pair per task.
+    input
+        .par_chunks_mut((2 * w * c).max(1))
+        .enumerate()
+        .for_each(|(row, input)| {
+            let at = row * ow * c;
+            let (grad, from) = (&grad[at..at + ow * c], &from[at..at + ow * c]);
+            for (j, (g, idx)) in grad.chunks_exact(c).zip(from.chunks_exact(c)).enumerate() {
+                for ch in 0..c {
+                    let q = idx[ch] as usize;
+                    input[((q / 2) * w + 2 * j + q % 2) * c + ch] = g[ch];
+                }
+            }
+        });
+    input
 }
 
 #[cfg(test)]
@@ -586,6 +933,31 @@ mod tests {
             shape: [0, 4, 4, 3],
         };
         assert_eq!(empty.conv3x3(&other, Activation::Relu).shape, [0, 4, 4, 4]);
+    }
+
+    #[test]
+    #[cfg(not(target_arch = "wasm32"))]
+    fn weight_gradients_do_not_depend_on_the_number_of_threads() {
+        let device = Device::flex();
+        device.seed(6);
+        let conv = new_conv3x3([5, 7], &device);
+        let x = Tensor::<4>::random([9, 5, 24, 24], Distribution::Default, &device);
+        let map = FeatureMap::from_channels_first(x);
+        let grad = Tensor::<4>::random([9, 48, 48, 7], Distribution::Default, &device);
+        let grad = values(grad);
+        let kernels = Kernels::new(&[&conv], 5, true);
+        let gradients = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| {
+                let (w, b) = kernels.weight_gradients(&map.data, map.shape, &grad, [9, 48, 48, 7]);
+                (w, b, kernels.input_gradient(&grad, [9, 48, 48, 7]))
+            })
+        };
+        // Bit for bit: a resumed training must repeat the same losses.
+        assert_eq!(gradients(1), gradients(3));
     }
 
     #[test]

@@ -1,10 +1,12 @@
 use burn::config::Config;
 use burn::module::Module;
 use burn::nn::conv::Conv2d;
-use burn::tensor::activation::{relu, sigmoid};
+use burn::tensor::activation::sigmoid;
 use burn::tensor::{Device, Tensor};
 
-use super::feature_map::{is_tracked, new_conv3x3, Activation, FeatureMap, KernelCache};
+#[cfg(not(target_arch = "wasm32"))]
+use super::feature_map::is_tracked;
+use super::feature_map::{new_conv3x3, Activation, FeatureMap, KernelCache};
 use super::gaussian::bounded_sigma;
 
 /// Filters of the two convolutions between the last upsampling block and the heads.
@@ -72,51 +74,72 @@ impl ImageDecoderConfig {
 
 impl ImageDecoder {
     /// `[K, input]` to the mean and σ frames, each `[K, 3, S, S]` with S = 2^(blocks + 1):
-    /// through burn's differentiable layers when training (see [`is_tracked`]), else through the
-    /// faster inference kernels ([`FeatureMap`]); the two agree to float rounding.
+    /// through the differentiable operations of [`conv_op`](super::conv_op) when training (see
+    /// [`is_tracked`]), else straight through the inference kernels ([`FeatureMap`]). Both fold
+    /// each upsampling into the convolution that reads it.
     pub fn forward(&self, x: Tensor<2>) -> (Tensor<4>, Tensor<4>) {
+        #[cfg(not(target_arch = "wasm32"))]
         if is_tracked(&x) || is_tracked(&self.mean.weight.val()) {
-            self.forward_differentiable(x)
-        } else {
-            self.forward_inference(x)
+            let (mean, sigma) = self.forward_tracked(x);
+            return self.heads(mean, sigma);
         }
-    }
-
-    /// [`ImageDecoder::forward`] through burn's layers (autodiff-capable).
-    pub fn forward_differentiable(&self, x: Tensor<2>) -> (Tensor<4>, Tensor<4>) {
-        let [k, width] = x.dims();
-        let mut x = x.reshape([k, width / 4, 2, 2]);
-        for conv in &self.blocks {
-            x = upsample2(relu(conv.forward(x)));
-        }
-        for conv in &self.tail {
-            x = relu(conv.forward(x));
-        }
-        let mean = sigmoid(self.mean.forward(x.clone()));
-        let sigma = bounded_sigma(self.sigma.forward(x), self.sigma_floor);
-        (mean, sigma)
-    }
-
-    /// [`ImageDecoder::forward`] through the inference kernels: each upsampling is folded into
-    /// the convolution that reads it, and both heads share one product.
-    pub fn forward_inference(&self, x: Tensor<2>) -> (Tensor<4>, Tensor<4>) {
         let [k, width] = x.dims();
         let device = x.device();
         let mut map = FeatureMap::from_channels_first(x.reshape([k, width / 4, 2, 2]));
         let layers = self.blocks.len() + self.tail.len();
         for (i, conv) in self.blocks.iter().chain(&self.tail).enumerate() {
-            // Every block's output is upsampled, so the convolution after one reads it so.
-            let upsampled = i > 0 && i <= self.blocks.len();
-            let kernels = self.kernels.get(i, &[conv], map.shape[3], upsampled);
+            let kernels = self
+                .kernels
+                .get(i, &[conv], map.shape[3], self.upsampled(i));
             map = map.conv3x3(&kernels, Activation::Relu);
         }
+        // Both heads in one product.
         let heads = [&self.mean, &self.sigma];
         let kernels = self.kernels.get(layers, &heads, map.shape[3], false);
-        let mut heads = map
-            .conv3x3(&kernels, Activation::Identity)
-            .into_channels_first(&[3, 3], &device)
-            .into_iter();
+        let heads = map.conv3x3(&kernels, Activation::Identity);
+        let mut heads = heads.into_channels_first(&[3, 3], &device).into_iter();
         let (mean, sigma) = (heads.next().expect("mean"), heads.next().expect("σ"));
+        self.heads(mean, sigma)
+    }
+
+    /// Whether the convolution of layer `i` (blocks, then tail) reads its input upsampled: every
+    /// block's output is.
+    fn upsampled(&self, i: usize) -> bool {
+        i > 0 && i <= self.blocks.len()
+    }
+
+    /// The layers as differentiable operations: `[K, input]` to the heads' raw outputs, each
+    /// `[K, 3, S, S]`.
+    #[cfg(not(target_arch = "wasm32"))]
+    fn forward_tracked(&self, x: Tensor<2>) -> (Tensor<4>, Tensor<4>) {
+        use super::conv_op::{channels_first, conv3x3};
+        let bias = |conv: &Conv2d| {
+            let bias = conv.bias.as_ref();
+            bias.expect("the decoder's convolutions have biases").val()
+        };
+        let [k, width] = x.dims();
+        let mut x = x.reshape([k, width / 4, 2, 2]).permute([0, 2, 3, 1]);
+        for (i, conv) in self.blocks.iter().chain(&self.tail).enumerate() {
+            let upsampled = self.upsampled(i);
+            x = conv3x3(
+                x,
+                conv.weight.val(),
+                bias(conv),
+                upsampled,
+                Activation::Relu,
+            );
+        }
+        let weight = Tensor::cat(vec![self.mean.weight.val(), self.sigma.weight.val()], 0);
+        let bias = Tensor::cat(vec![bias(&self.mean), bias(&self.sigma)], 0);
+        let heads = conv3x3(x, weight, bias, false, Activation::Identity);
+        (
+            channels_first(heads.clone(), 0..3),
+            channels_first(heads, 3..6),
+        )
+    }
+
+    /// The heads' raw outputs to the mean (sigmoid) and σ frames.
+    fn heads(&self, mean: Tensor<4>, sigma: Tensor<4>) -> (Tensor<4>, Tensor<4>) {
         (sigmoid(mean), bounded_sigma(sigma, self.sigma_floor))
     }
 }
@@ -132,6 +155,7 @@ pub fn upsample2(x: Tensor<4>) -> Tensor<4> {
 #[cfg(all(test, not(target_arch = "wasm32")))]
 mod tests {
     use super::*;
+    use burn::tensor::activation::relu;
     use burn::tensor::Distribution;
 
     fn decoder(device: &Device) -> ImageDecoder {
@@ -156,29 +180,73 @@ mod tests {
         assert_eq!(y, expected);
     }
 
+    /// The decoder through burn's own layers (upsampling in full): what both paths must equal,
+    /// values and gradients.
+    fn reference(decoder: &ImageDecoder, x: Tensor<2>) -> (Tensor<4>, Tensor<4>) {
+        let [k, width] = x.dims();
+        let mut x = x.reshape([k, width / 4, 2, 2]);
+        for conv in &decoder.blocks {
+            x = upsample2(relu(conv.forward(x)));
+        }
+        for conv in &decoder.tail {
+            x = relu(conv.forward(x));
+        }
+        let mean = sigmoid(decoder.mean.forward(x.clone()));
+        let sigma = bounded_sigma(decoder.sigma.forward(x), decoder.sigma_floor);
+        (mean, sigma)
+    }
+
+    fn diff(a: Tensor<4>, b: Tensor<4>) -> f32 {
+        assert_eq!(a.dims(), b.dims());
+        (a - b).abs().max().into_scalar()
+    }
+
     #[test]
-    fn inference_kernels_equal_the_differentiable_layers() {
+    fn inference_equals_burns_layers() {
         let device = Device::flex();
         let decoder = decoder(&device);
         let x = Tensor::<2>::random([3, 64], Distribution::Normal(0.0, 1.0), &device);
-        let (mean, sigma) = decoder.forward_differentiable(x.clone());
-        let (fast_mean, fast_sigma) = decoder.forward_inference(x.clone());
+        let (mean, sigma) = reference(&decoder, x.clone());
+        let (fast_mean, fast_sigma) = decoder.forward(x);
         assert_eq!(mean.dims(), [3, 3, 16, 16]);
-        let diff = |a: Tensor<4>, b: Tensor<4>| (a - b).abs().max().into_scalar::<f32>();
         assert!(diff(mean, fast_mean) < 1e-5);
         assert!(diff(sigma, fast_sigma) < 1e-5);
     }
 
     #[test]
-    fn training_goes_through_the_differentiable_layers() {
+    fn training_equals_burns_layers_in_values_and_gradients() {
         let device = Device::flex().autodiff();
         let decoder = decoder(&device);
-        let x = Tensor::<2>::random([2, 64], Distribution::Normal(0.0, 1.0), &device);
-        let (mean, sigma) = decoder.forward(x);
-        let grads = (mean.sum() + sigma.sum()).backward();
-        for conv in decoder.blocks.iter().chain(&decoder.tail) {
-            assert!(conv.weight.grad(&grads).is_some());
+        let x =
+            Tensor::<2>::random([2, 64], Distribution::Normal(0.0, 1.0), &device).require_grad();
+        let (mean, sigma) = decoder.forward(x.clone());
+        let (ref_mean, ref_sigma) = reference(&decoder, x.clone());
+        assert!(diff(mean.clone().inner(), ref_mean.clone().inner()) < 1e-5);
+        assert!(diff(sigma.clone().inner(), ref_sigma.clone().inner()) < 1e-5);
+        // Weighted sums, so that every gradient differs from pixel to pixel.
+        let (wm, ws) = (
+            mean.random_like(Distribution::Default),
+            sigma.random_like(Distribution::Default),
+        );
+        let loss = |m: Tensor<4>, s: Tensor<4>| (m * wm.clone()).sum() + (s * ws.clone()).sum();
+        let grads = loss(mean, sigma).backward();
+        let expected = loss(ref_mean, ref_sigma).backward();
+        let close = |got: Option<Tensor<4>>, want: Option<Tensor<4>>| {
+            let (got, want) = (got.expect("a gradient"), want.expect("burn's gradient"));
+            let scale: f32 = want.clone().abs().max().into_scalar();
+            let d = diff(got, want);
+            assert!(d <= 1e-4 * scale.max(1.0), "{d} vs {scale}");
+        };
+        let convs = decoder.blocks.iter().chain(&decoder.tail);
+        for conv in convs.chain([&decoder.mean, &decoder.sigma]) {
+            close(conv.weight.grad(&grads), conv.weight.grad(&expected));
+            let bias = conv.bias.as_ref().unwrap();
+            close(
+                bias.grad(&grads).map(|b| b.reshape([1, 1, 1, -1])),
+                bias.grad(&expected).map(|b| b.reshape([1, 1, 1, -1])),
+            );
         }
-        assert!(decoder.sigma.weight.grad(&grads).is_some());
+        let got = x.grad(&grads).map(|g| g.reshape([1, 1, 2, 64]));
+        close(got, x.grad(&expected).map(|g| g.reshape([1, 1, 2, 64])));
     }
 }

@@ -1,12 +1,13 @@
 use burn::config::Config;
 use burn::module::Module;
 use burn::nn::conv::Conv2d;
-use burn::nn::pool::MaxPool2dConfig;
 use burn::nn::{Linear, LinearConfig};
 use burn::tensor::activation::relu;
 use burn::tensor::{Device, Tensor};
 
-use super::feature_map::{is_tracked, new_conv3x3, Activation, FeatureMap, KernelCache};
+#[cfg(not(target_arch = "wasm32"))]
+use super::feature_map::is_tracked;
+use super::feature_map::{new_conv3x3, Activation, FeatureMap, KernelCache};
 
 /// Configuration of an [`ImageEncoder`].
 #[derive(Config, Debug)]
@@ -55,26 +56,45 @@ impl ImageEncoderConfig {
 }
 
 impl ImageEncoder {
-    /// `[K, C, S, S]` frames (S = 2^(blocks + 1)) to `[K, H]` encodings: through burn's
-    /// differentiable layers when training (see [`is_tracked`]), else through the inference kernels
-    /// ([`FeatureMap`]).
+    /// `[K, C, S, S]` frames (S = 2^(blocks + 1)) to `[K, H]` encodings: through the
+    /// differentiable operations of [`conv_op`](super::conv_op) when training (see
+    /// [`is_tracked`]), else straight through the inference kernels ([`FeatureMap`]).
     pub fn forward(&self, images: Tensor<4>) -> Tensor<2> {
-        let tracked = self.convs.first().map(|c| is_tracked(&c.weight.val()));
-        let x = if is_tracked(&images) || tracked.unwrap_or(false) {
-            let pool = MaxPool2dConfig::new([2, 2]).init();
-            self.convs
-                .iter()
-                .fold(images, |x, conv| pool.forward(relu(conv.forward(x))))
-        } else {
-            let device = images.device();
-            let mut map = FeatureMap::from_channels_first(images);
-            for (i, conv) in self.convs.iter().enumerate() {
-                let kernels = self.kernels.get(i, &[conv], map.shape[3], false);
-                map = map.conv3x3(&kernels, Activation::Relu).max_pool2();
+        #[cfg(not(target_arch = "wasm32"))]
+        {
+            let weight = self.convs.first().map(|c| c.weight.val());
+            if is_tracked(&images) || weight.is_some_and(|w| is_tracked(&w)) {
+                return self.encode(self.convs_tracked(images));
             }
-            let c = map.shape[3];
-            map.into_channels_first(&[c], &device).remove(0)
-        };
+        }
+        let device = images.device();
+        let mut map = FeatureMap::from_channels_first(images);
+        for (i, conv) in self.convs.iter().enumerate() {
+            let kernels = self.kernels.get(i, &[conv], map.shape[3], false);
+            map = map.conv3x3(&kernels, Activation::Relu).max_pool2();
+        }
+        let c = map.shape[3];
+        self.encode(map.into_channels_first(&[c], &device).remove(0))
+    }
+
+    /// The conv blocks as differentiable operations: `[K, C, S, S]` to `[K, C_last, 2, 2]`.
+    #[cfg(not(target_arch = "wasm32"))]
+    fn convs_tracked(&self, images: Tensor<4>) -> Tensor<4> {
+        use super::conv_op::{conv3x3, max_pool2};
+        let mut x = images.permute([0, 2, 3, 1]);
+        for conv in &self.convs {
+            let bias = conv
+                .bias
+                .as_ref()
+                .expect("the encoder's convolutions have biases");
+            let y = conv3x3(x, conv.weight.val(), bias.val(), false, Activation::Relu);
+            x = max_pool2(y);
+        }
+        x.permute([0, 3, 1, 2])
+    }
+
+    /// The last feature maps `[K, C, 2, 2]` to the encodings.
+    fn encode(&self, x: Tensor<4>) -> Tensor<2> {
         let [k, c, h, w] = x.dims();
         relu(self.dense.forward(x.reshape([k, c * h * w])))
     }
@@ -85,21 +105,53 @@ mod tests {
     use super::*;
     use burn::tensor::Distribution;
 
+    /// The encoder through burn's own layers: what both paths must equal, values and gradients.
+    fn reference(encoder: &ImageEncoder, images: Tensor<4>) -> Tensor<2> {
+        let pool = burn::nn::pool::MaxPool2dConfig::new([2, 2]).init();
+        let x = encoder
+            .convs
+            .iter()
+            .fold(images, |x, conv| pool.forward(relu(conv.forward(x))));
+        encoder.encode(x)
+    }
+
     #[test]
-    fn inference_kernels_equal_the_differentiable_layers_and_training_reaches_the_convs() {
-        // One encoder for both paths: two seeded inits can differ when tests run in parallel
+    fn inference_and_training_equal_burns_layers_in_values_and_gradients() {
+        // One encoder for all paths: two seeded inits can differ when tests run in parallel
         // (the generator is shared).
         let ad = Device::flex().autodiff();
         let encoder = ImageEncoderConfig::new(4, vec![8, 16, 16]).init(&ad);
         let device = Device::flex();
         let frames = Tensor::<4>::random([3, 4, 16, 16], Distribution::Default, &device);
         let fast = encoder.valid().forward(frames.clone());
-        let tracked = encoder.forward(Tensor::from_data(frames.into_data(), &ad));
-        let diff: f32 = (tracked.clone().inner() - fast).abs().max().into_scalar();
-        assert!(diff < 1e-5, "{diff}");
-        let grads = tracked.sum().backward();
+        let frames = Tensor::<4>::from_data(frames.into_data(), &ad);
+        let tracked = encoder.forward(frames.clone());
+        let expected = reference(&encoder, frames);
+        let diff = |a: Tensor<2>, b: Tensor<2>| (a - b).abs().max().into_scalar::<f32>();
+        assert!(diff(tracked.clone().inner(), fast) < 1e-5);
+        assert!(diff(tracked.clone().inner(), expected.clone().inner()) < 1e-5);
+        // A weighted sum, so that every gradient differs from pixel to pixel.
+        let weights = Tensor::<2>::random(tracked.dims(), Distribution::Default, &ad);
+        let grads = (tracked * weights.clone()).sum().backward();
+        let expected = (expected * weights).sum().backward();
         for conv in &encoder.convs {
-            assert!(conv.weight.grad(&grads).is_some());
+            let got = conv
+                .weight
+                .grad(&grads)
+                .expect("a gradient for every convolution");
+            let want = conv.weight.grad(&expected).expect("burn's gradient");
+            let d: f32 = (got - want.clone()).abs().max().into_scalar();
+            let scale: f32 = want.abs().max().into_scalar();
+            assert!(d <= 1e-4 * scale.max(1.0), "{d} vs {scale}");
+            let got = conv
+                .bias
+                .as_ref()
+                .unwrap()
+                .grad(&grads)
+                .expect("bias gradient");
+            let want = conv.bias.as_ref().unwrap().grad(&expected).unwrap();
+            let d: f32 = (got - want).abs().max().into_scalar();
+            assert!(d <= 1e-4 * scale.max(1.0), "{d}");
         }
     }
 }

@@ -13,6 +13,8 @@ mod aggregation;
 mod batch_tensors;
 mod config;
 mod context_projection;
+#[cfg(not(target_arch = "wasm32"))]
+mod conv_op;
 mod decoder;
 mod dmbn;
 mod dmbn_pte;
