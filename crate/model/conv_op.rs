@@ -1,6 +1,7 @@
 //! The image networks' layers as operations of burn's autodiff backend, for training: a 3×3
 //! 'same' convolution (optionally of the 2× nearest upsampling of its input, with its
-//! activation) and 2×2 max pooling, on channels-last `[K, H, W, C]` tensors.
+//! activation) and 2×2 max pooling on channels-last `[K, H, W, C]` tensors, and the copy of
+//! the heads' channels to channels-first frames.
 //!
 //! burn flex's differentiable `conv2d` spends three quarters of a training step in its
 //! convolutions and their gradients (one frame at a time, and the decoder convolves every
