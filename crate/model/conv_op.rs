@@ -27,6 +27,13 @@ use super::feature_map::{max_pool2_gradient, max_pool2_indexed, Activation, Kern
 /// The autodiff backend training runs on (`Device::flex().autodiff()`).
 type Trained = Autodiff<Flex, NoCheckpointing>;
 
+/// Whether `x` lives on the backend these operations run on (flex with autodiff, as
+/// `Device::flex().autodiff()` makes); on others (the `cuda` feature) the networks train
+/// through burn's own layers.
+pub fn supported<const D: usize>(x: &Tensor<D>) -> bool {
+    x.clone().try_into_primitive::<Trained>().is_ok()
+}
+
 /// The primitive of a tensor of the training device.
 fn primitive<const D: usize>(x: Tensor<D>) -> FloatTensor<Trained> {
     x.try_into_primitive::<Trained>()

@@ -75,12 +75,17 @@ impl ImageDecoderConfig {
 impl ImageDecoder {
     /// `[K, input]` to the mean and σ frames, each `[K, 3, S, S]` with S = 2^(blocks + 1):
     /// through the differentiable operations of [`conv_op`](super::conv_op) when training (see
-    /// [`is_tracked`]), else straight through the inference kernels ([`FeatureMap`]). Both fold
-    /// each upsampling into the convolution that reads it.
+    /// [`is_tracked`]; through burn's layers on other backends than flex), else straight through
+    /// the inference kernels ([`FeatureMap`]). Both of ours fold each upsampling into the
+    /// convolution that reads it.
     pub fn forward(&self, x: Tensor<2>) -> (Tensor<4>, Tensor<4>) {
         #[cfg(not(target_arch = "wasm32"))]
         if is_tracked(&x) || is_tracked(&self.mean.weight.val()) {
-            let (mean, sigma) = self.forward_tracked(x);
+            let (mean, sigma) = if super::conv_op::supported(&x) {
+                self.forward_tracked(x)
+            } else {
+                self.forward_burn(x)
+            };
             return self.heads(mean, sigma);
         }
         let [k, width] = x.dims();
@@ -138,6 +143,23 @@ impl ImageDecoder {
         )
     }
 
+    /// The layers through burn's own operations (upsampling in full), for training on backends
+    /// other than flex (the `cuda` feature), and what tests compare the other paths with:
+    /// `[K, input]` to the heads' raw outputs.
+    #[cfg(not(target_arch = "wasm32"))]
+    fn forward_burn(&self, x: Tensor<2>) -> (Tensor<4>, Tensor<4>) {
+        use burn::tensor::activation::relu;
+        let [k, width] = x.dims();
+        let mut x = x.reshape([k, width / 4, 2, 2]);
+        for conv in &self.blocks {
+            x = upsample2(relu(conv.forward(x)));
+        }
+        for conv in &self.tail {
+            x = relu(conv.forward(x));
+        }
+        (self.mean.forward(x.clone()), self.sigma.forward(x))
+    }
+
     /// The heads' raw outputs to the mean (sigmoid) and σ frames.
     fn heads(&self, mean: Tensor<4>, sigma: Tensor<4>) -> (Tensor<4>, Tensor<4>) {
         (sigmoid(mean), bounded_sigma(sigma, self.sigma_floor))
@@ -155,7 +177,6 @@ pub fn upsample2(x: Tensor<4>) -> Tensor<4> {
 #[cfg(all(test, not(target_arch = "wasm32")))]
 mod tests {
     use super::*;
-    use burn::tensor::activation::relu;
     use burn::tensor::Distribution;
 
     fn decoder(device: &Device) -> ImageDecoder {
@@ -180,20 +201,10 @@ mod tests {
         assert_eq!(y, expected);
     }
 
-    /// The decoder through burn's own layers (upsampling in full): what both paths must equal,
-    /// values and gradients.
+    /// The decoder through burn's own layers: what both paths must equal.
     fn reference(decoder: &ImageDecoder, x: Tensor<2>) -> (Tensor<4>, Tensor<4>) {
-        let [k, width] = x.dims();
-        let mut x = x.reshape([k, width / 4, 2, 2]);
-        for conv in &decoder.blocks {
-            x = upsample2(relu(conv.forward(x)));
-        }
-        for conv in &decoder.tail {
-            x = relu(conv.forward(x));
-        }
-        let mean = sigmoid(decoder.mean.forward(x.clone()));
-        let sigma = bounded_sigma(decoder.sigma.forward(x), decoder.sigma_floor);
-        (mean, sigma)
+        let (mean, sigma) = decoder.forward_burn(x);
+        decoder.heads(mean, sigma)
     }
 
     fn diff(a: Tensor<4>, b: Tensor<4>) -> f32 {
@@ -211,6 +222,22 @@ mod tests {
         assert_eq!(mean.dims(), [3, 3, 16, 16]);
         assert!(diff(mean, fast_mean) < 1e-5);
         assert!(diff(sigma, fast_sigma) < 1e-5);
+    }
+
+    #[test]
+    fn other_autodiff_backends_train_through_burns_layers() {
+        // Gradient checkpointing is another autodiff backend than the one conv_op runs on (as
+        // the `cuda` feature's device is): training must fall back, not panic.
+        let device = Device::flex().autodiff().gradient_checkpointing();
+        let decoder = decoder(&device);
+        let x = Tensor::<2>::random([2, 64], Distribution::Normal(0.0, 1.0), &device);
+        assert!(!super::super::conv_op::supported(&x));
+        let (mean, sigma) = decoder.forward(x.clone());
+        let (ref_mean, ref_sigma) = reference(&decoder, x);
+        assert!(diff(mean.clone().inner(), ref_mean.inner()) < 1e-6);
+        assert!(diff(sigma.inner(), ref_sigma.inner()) < 1e-6);
+        let grads = mean.sum().backward();
+        assert!(decoder.mean.weight.grad(&grads).is_some());
     }
 
     #[test]
