@@ -167,10 +167,15 @@ describe("demo page", () => {
 
     const episode = () => page.getAttribute("#object-info", "title");
     const first = await episode();
+    const switched = Date.now();
     await page.selectOption("#action", "move");
     const moved = await episode();
     assert.notEqual(moved, first, "a new episode for another action");
-    assert.equal(Number(await page.inputValue("#scrubber")) <= 2, true, "it plays from the start");
+    // Back to step 0, then playing at 20 steps/s: at most the steps played since the switch (a
+    // loaded machine takes longer to answer; a fixed bound failed under load).
+    const step = Number(await page.inputValue("#scrubber"));
+    const since = Math.ceil((Date.now() - switched) / 50) + 2;
+    assert.ok(step <= since, `it plays from the start (step ${step}, ${since} steps since the switch)`);
     await page.fill("#seed", "3");
     await page.press("#seed", "Enter");
     await page.locator("#seed").blur();
