@@ -20,6 +20,7 @@ use burn::backend::autodiff::ops::{Backward, Ops, OpsKind};
 use burn::backend::flex::FlexTensor;
 use burn::backend::tensor::FloatTensor;
 use burn::backend::{Autodiff, Flex};
+use burn::nn::conv::Conv2d;
 use burn::tensor::{Tensor, TensorData};
 
 use super::feature_map::{max_pool2_gradient, max_pool2_indexed, Activation, Kernels};
@@ -119,10 +120,22 @@ impl Backward<Flex, 3> for Conv3x3Backward {
     }
 }
 
+/// The bias of one of the image networks' convolutions (they all have one).
+pub fn bias(conv: &Conv2d) -> Tensor<1> {
+    let bias = conv.bias.as_ref();
+    bias.expect("the image networks' convolutions have biases")
+        .val()
+}
+
+/// [`conv3x3_weights`] with the weight and bias of the 3×3 convolution `conv`.
+pub fn conv3x3(x: Tensor<4>, conv: &Conv2d, upsampled: bool, activation: Activation) -> Tensor<4> {
+    conv3x3_weights(x, conv.weight.val(), bias(conv), upsampled, activation)
+}
+
 /// `activation(conv3x3(x) + bias)` of the channels-last `[K, H, W, C_in]` map `x` (or of its
 /// nearest 2× upsampling, with `upsampled`) for the kernel `weight` `[C_out, C_in, 3, 3]`:
 /// `[K, H, W, C_out]` (or `[K, 2H, 2W, C_out]`), differentiable w.r.t. all three inputs.
-pub fn conv3x3(
+pub fn conv3x3_weights(
     x: Tensor<4>,
     weight: Tensor<4>,
     bias: Tensor<1>,

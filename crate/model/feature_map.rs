@@ -776,17 +776,13 @@ impl FeatureMap {
 
     /// 2×2 max pooling with stride 2.
     pub fn max_pool2(&self) -> Self {
-        self.max_pool2_indexed().0
-    }
-
-    /// 2×2 max pooling with stride 2, and for each output value which of its four inputs
-    /// (row-major, the first of equals) it came from: where its gradient goes.
-    pub fn max_pool2_indexed(&self) -> (Self, Vec<u8>) {
-        max_pool2_indexed(&self.data, self.shape)
+        max_pool2_indexed(&self.data, self.shape).0
     }
 }
 
-/// [`FeatureMap::max_pool2_indexed`] of the `[K, H, W, C]` map `input`.
+/// 2×2 max pooling with stride 2 of the `[K, H, W, C]` map `input`, and for each output value
+/// which of its four inputs (row-major, the first of equals) it came from: where its gradient
+/// goes.
 pub fn max_pool2_indexed(input: &[f32], [k, h, w, c]: [usize; 4]) -> (FeatureMap, Vec<u8>) {
     let (oh, ow) = (h / 2, w / 2);
     let mut out = vec![0.0; k * oh * ow * c];
@@ -837,7 +833,7 @@ pub fn max_pool2_indexed(input: &[f32], [k, h, w, c]: [usize; 4]) -> (FeatureMap
     (map, from)
 }
 
-/// The gradient w.r.t. the `[K, H, W, C]` input of [`FeatureMap::max_pool2_indexed`] from the
+/// The gradient w.r.t. the `[K, H, W, C]` input of [`max_pool2_indexed`] from the
 /// gradient `grad` w.r.t. its output and the `from` indices it returned.
 #[cfg(not(target_arch = "wasm32"))]
 pub fn max_pool2_gradient(grad: &[f32], from: &[u8], [k, h, w, c]: [usize; 4]) -> Vec<f32> {
@@ -864,14 +860,10 @@ pub fn max_pool2_gradient(grad: &[f32], from: &[u8], [k, h, w, c]: [usize; 4]) -
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::testing::max_abs_diff;
     use crate::model::upsample2;
     use burn::nn::pool::MaxPool2dConfig;
     use burn::tensor::Distribution;
-
-    fn max_abs_diff(a: Tensor<4>, b: Tensor<4>) -> f32 {
-        assert_eq!(a.dims(), b.dims());
-        (a - b).abs().max().into_scalar()
-    }
 
     #[test]
     fn conv3x3_equals_burns_conv2d_plain_upsampled_and_stacked() {

@@ -117,26 +117,16 @@ impl ImageDecoder {
     /// `[K, 3, S, S]`.
     #[cfg(not(target_arch = "wasm32"))]
     fn forward_tracked(&self, x: Tensor<2>) -> (Tensor<4>, Tensor<4>) {
-        use super::conv_op::{channels_first, conv3x3};
-        let bias = |conv: &Conv2d| {
-            let bias = conv.bias.as_ref();
-            bias.expect("the decoder's convolutions have biases").val()
-        };
+        use super::conv_op::{bias, channels_first, conv3x3, conv3x3_weights};
         let [k, width] = x.dims();
         let mut x = x.reshape([k, width / 4, 2, 2]).permute([0, 2, 3, 1]);
         for (i, conv) in self.blocks.iter().chain(&self.tail).enumerate() {
-            let upsampled = self.upsampled(i);
-            x = conv3x3(
-                x,
-                conv.weight.val(),
-                bias(conv),
-                upsampled,
-                Activation::Relu,
-            );
+            x = conv3x3(x, conv, self.upsampled(i), Activation::Relu);
         }
+        // Both heads in one convolution.
         let weight = Tensor::cat(vec![self.mean.weight.val(), self.sigma.weight.val()], 0);
         let bias = Tensor::cat(vec![bias(&self.mean), bias(&self.sigma)], 0);
-        let heads = conv3x3(x, weight, bias, false, Activation::Identity);
+        let heads = conv3x3_weights(x, weight, bias, false, Activation::Identity);
         (
             channels_first(heads.clone(), 0..3),
             channels_first(heads, 3..6),
@@ -177,6 +167,7 @@ pub fn upsample2(x: Tensor<4>) -> Tensor<4> {
 #[cfg(all(test, not(target_arch = "wasm32")))]
 mod tests {
     use super::*;
+    use crate::model::testing::{assert_gradient_close, max_abs, max_abs_diff as diff};
     use burn::tensor::Distribution;
 
     fn decoder(device: &Device) -> ImageDecoder {
@@ -205,11 +196,6 @@ mod tests {
     fn reference(decoder: &ImageDecoder, x: Tensor<2>) -> (Tensor<4>, Tensor<4>) {
         let (mean, sigma) = decoder.forward_burn(x);
         decoder.heads(mean, sigma)
-    }
-
-    fn diff(a: Tensor<4>, b: Tensor<4>) -> f32 {
-        assert_eq!(a.dims(), b.dims());
-        (a - b).abs().max().into_scalar()
     }
 
     #[test]
@@ -258,22 +244,18 @@ mod tests {
         let loss = |m: Tensor<4>, s: Tensor<4>| (m * wm.clone()).sum() + (s * ws.clone()).sum();
         let grads = loss(mean, sigma).backward();
         let expected = loss(ref_mean, ref_sigma).backward();
-        let close = |got: Option<Tensor<4>>, want: Option<Tensor<4>>| {
+        // Each gradient within 1e-4 of its own scale.
+        fn close<const D: usize>(got: Option<Tensor<D>>, want: Option<Tensor<D>>) {
             let (got, want) = (got.expect("a gradient"), want.expect("burn's gradient"));
-            let scale: f32 = want.clone().abs().max().into_scalar();
-            let d = diff(got, want);
-            assert!(d <= 1e-4 * scale.max(1.0), "{d} vs {scale}");
-        };
+            let scale = max_abs(want.clone());
+            assert_gradient_close(got, want, scale);
+        }
         let convs = decoder.blocks.iter().chain(&decoder.tail);
         for conv in convs.chain([&decoder.mean, &decoder.sigma]) {
             close(conv.weight.grad(&grads), conv.weight.grad(&expected));
             let bias = conv.bias.as_ref().unwrap();
-            close(
-                bias.grad(&grads).map(|b| b.reshape([1, 1, 1, -1])),
-                bias.grad(&expected).map(|b| b.reshape([1, 1, 1, -1])),
-            );
+            close(bias.grad(&grads), bias.grad(&expected));
         }
-        let got = x.grad(&grads).map(|g| g.reshape([1, 1, 2, 64]));
-        close(got, x.grad(&expected).map(|g| g.reshape([1, 1, 2, 64])));
+        close(x.grad(&grads), x.grad(&expected));
     }
 }

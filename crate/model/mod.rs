@@ -30,6 +30,8 @@ mod loss;
 #[allow(clippy::module_inception)]
 mod model;
 mod prediction;
+#[cfg(test)]
+mod testing;
 mod time_projection;
 
 pub use crate::data::Normalization;
