@@ -20,10 +20,10 @@ export CARGO_TARGET_DIR=${CARGO_TARGET_DIR:-$HOME/.cache/dmbn/target}
 
 case $set_name in
   # The paper holds out 10 of 50 ids; ids 40-49 are not public, so 32-39 (20%) are held out.
-  2020) fraction=0.2; steps=3000; held=$(seq 32 39) ;;
+  2020) fraction=0.2; steps=3000; every=200; held=$(seq 32 39) ;;
   # The simulator's 200 ids (seeds 1000-1199): the last 10% (180-199) are held out, as in
   # training; the t/p/f evaluations use the last 10 of them.
-  sim) fraction=0.1; steps=2000; held=$(seq 190 199) ;;
+  sim) fraction=0.1; steps=6000; every=500; held=$(seq 190 199) ;;
   *) echo "error: the first argument is 2020 or sim, not '$set_name'" >&2; exit 2 ;;
 esac
 if [ ! -d "$data" ]; then
@@ -50,8 +50,8 @@ if [ "${TRAIN:-0}" = 1 ]; then
     resume=()
     [ -f "$out/runs/$m/checkpoint/state.json" ] && resume=(--resume)
     "$bin/train" --data "$data" --model "$kind" "${extra[@]}" --out "$out/runs/$m" \
-      --steps "$steps" --seed 1 --lr 3e-4 --schedule cosine --val-every 200 \
-      --checkpoint-every 200 --val-fraction "$fraction" --half "${resume[@]}"
+      --steps "$steps" --seed 1 --lr 3e-4 --schedule cosine --val-every "$every" \
+      --checkpoint-every "$every" --val-fraction "$fraction" --half "${resume[@]}"
     file[$m]=$out/runs/$m/model.dmbn
   done
 fi
