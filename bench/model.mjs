@@ -71,8 +71,8 @@ async function main() {
     const one = await median(() => model.predict(frames, joints, times, new Float32Array([0.5]), 0.5).free(), reps * 5);
     const sequence = await median(() => model.predict(frames, joints, times, seq100, 0.5).free(), reps);
     model.free();
-    const pool = await Promise.all(
-      shares.map(() => start(new Worker(fileURLToPath(import.meta.url), { workerData: { pkgDir, modelPath, observations: { frames, joints, times } } }))),
+    const pool = shares.map(() =>
+      start(new Worker(fileURLToPath(import.meta.url), { workerData: { pkgDir, modelPath, observations: { frames, joints, times } } })),
     );
     const parallel = await median(() => Promise.all(pool.map((w, i) => w.run(shares[i]))), reps);
     await Promise.all(pool.map((w) => w.worker.terminate()));
@@ -90,7 +90,10 @@ async function main() {
   console.log(`json: ${JSON.stringify(out)}`);
 }
 
-/** A worker with `run(targets)`: a promise that resolves when it has predicted them. */
+/**
+ * A worker with `run(targets)`: a promise that resolves when it has predicted them. Its first
+ * run also waits for the worker to load the model: `median`'s untimed runs take that.
+ */
 function start(worker) {
   let done = null;
   worker.on("message", () => done());
@@ -100,8 +103,7 @@ function start(worker) {
       done = resolve;
       worker.postMessage(targets);
     });
-  // The first run loads the model and compiles the module: wait for it before timing.
-  return run(new Float32Array([0.5])).then(() => ({ worker, run }));
+  return { worker, run };
 }
 
 async function median(fn, n) {
