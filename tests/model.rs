@@ -254,6 +254,13 @@ fn save_and_load_a_file() {
     let err = file::load(dir.path().join("missing.dmbn"), &device).unwrap_err();
     assert!(matches!(err, ModelError::Io { .. }), "{err}");
     assert!(err.to_string().contains("missing.dmbn"), "{err}");
+    // A bad file says which file, and what is wrong with it.
+    let bytes = std::fs::read(&path).unwrap();
+    std::fs::write(&path, &bytes[..bytes.len() - 1]).unwrap();
+    let err = file::load(&path, &device).unwrap_err();
+    assert!(matches!(err, ModelError::InFile { .. }), "{err}");
+    assert!(err.to_string().contains("pte.dmbn"), "{err}");
+    assert!(err.to_string().contains("truncated"), "{err}");
 }
 
 /// Rebuilds a file from a header and a weight section (the checksum and length follow the

@@ -154,6 +154,15 @@ fn bad_model_files_are_clear_errors() {
     assert!(err.contains("128"), "{err}");
     let err = message(Predictor::load("/nonexistent/model.dmbn").unwrap_err());
     assert!(err.contains("/nonexistent/model.dmbn"), "{err}");
+    // A bad file read from a path says which file.
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("half.dmbn");
+    std::fs::write(&path, &bytes[..bytes.len() / 2]).unwrap();
+    let err = message(Predictor::load(&path).unwrap_err());
+    assert!(
+        err.contains(&*path.to_string_lossy()) && err.contains("truncated"),
+        "{err}"
+    );
 }
 
 fn dmbn(args: &[&str]) -> std::process::Output {

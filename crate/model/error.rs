@@ -81,6 +81,14 @@ pub enum ModelError {
         #[source]
         source: io::Error,
     },
+    /// A model file read from a path: which one (`dmbn probe` reads two).
+    #[cfg(not(target_arch = "wasm32"))]
+    #[error("{}: {source}", path.display())]
+    InFile {
+        path: PathBuf,
+        #[source]
+        source: Box<ModelError>,
+    },
 }
 
 impl ModelError {
@@ -97,6 +105,20 @@ impl ModelError {
         ModelError::Observation {
             field,
             reason: reason.into(),
+        }
+    }
+
+    /// Wrap the error of reading the model file at `path` with that path (an io error already
+    /// has it).
+    #[cfg(not(target_arch = "wasm32"))]
+    pub(crate) fn in_file(path: impl Into<PathBuf>) -> impl FnOnce(ModelError) -> ModelError {
+        let path = path.into();
+        move |source| match source {
+            ModelError::Io { .. } => source,
+            source => ModelError::InFile {
+                path,
+                source: Box::new(source),
+            },
         }
     }
 

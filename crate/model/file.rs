@@ -225,7 +225,7 @@ pub fn load_expecting(
 ) -> Result<(Model, Normalization, ModelConfig), ModelError> {
     let path = path.as_ref();
     let bytes = std::fs::read(path).map_err(ModelError::io(path))?;
-    load_bytes_expecting(&bytes, device, kind, image_size)
+    load_bytes_expecting(&bytes, device, kind, image_size).map_err(ModelError::in_file(path))
 }
 
 /// Checks the framing, parses and validates the header, checks the weights' checksum and

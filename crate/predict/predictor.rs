@@ -57,7 +57,7 @@ impl Predictor {
     pub fn load(path: impl AsRef<std::path::Path>) -> Result<Self, ModelError> {
         let path = path.as_ref();
         let bytes = std::fs::read(path).map_err(ModelError::io(path))?;
-        Self::from_bytes(&bytes)
+        Self::from_bytes(&bytes).map_err(ModelError::in_file(path))
     }
 
     /// The model.
