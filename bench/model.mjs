@@ -1,5 +1,5 @@
 #!/usr/bin/env node
-// DMBN / DMBN-PTE inference in WebAssembly (simd128) under Node: one target and a 100-step
+// Attentive / DMBN / DMBN-PTE inference in WebAssembly (simd128) under Node: one target and a 100-step
 // sequence from 5 observed steps of a simulated grasp, on the shipped weights. The 100 steps
 // are timed on one thread and split over N worker threads (each with its own instance, as
 // the page's inference workers: WebAssembly here has no shared-memory threads).
@@ -65,7 +65,7 @@ async function main() {
 
   console.log(`model benchmark (wasm, node ${process.version}): 64x64, median of ${reps} runs, ${workers} workers`);
   const out = [];
-  for (const [kind, file] of [["dmbn", "dmbn-sim.dmbn"], ["pte", "pte-sim.dmbn"]]) {
+  for (const [kind, file] of [["attn", "attn-sim.dmbn"], ["dmbn", "dmbn-sim.dmbn"], ["pte", "pte-sim.dmbn"]]) {
     const modelPath = join(root, "assets", "models", file);
     const model = wasm.Model.fromBytes(readFileSync(modelPath));
     const one = await median(() => model.predict(frames, joints, times, new Float32Array([0.5]), 0.5).free(), reps * 5);

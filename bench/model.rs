@@ -51,6 +51,8 @@ fn main() {
         batch: 8,
         max_contexts: 5,
         targets: 4,
+        contexts_in_targets: false,
+        joint_targets: 0,
         warp: None,
     });
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());

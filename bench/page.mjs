@@ -1,9 +1,9 @@
 #!/usr/bin/env node
 // The demo page in headless Chromium (the browser tests' setup): time from navigation to
 // `ready` on localhost, the wasm size (raw and gzip), one predicted frame and a 100-step
-// sequence for both models through the page's worker, and the page's own progressive
-// prediction of a whole episode. Saves a screenshot of the page mid-prediction to
-// docs/page.png.
+// sequence for the attentive model (the page's default), DMBN and DMBN-PTE through the page's
+// worker, and the page's own progressive prediction of a whole episode. Saves a screenshot of
+// the page mid-prediction to docs/page.png.
 //
 // Usage: node bench/page.mjs [--runs N] [--no-screenshot]
 //   Needs the web package: wasm-pack build --release --target web --out-dir pkg --no-typescript
@@ -47,6 +47,10 @@ const median = (xs) => {
 };
 const round = (v, d = 1) => Number(v.toFixed(d));
 const TIMEOUT = 120_000;
+/** The models timed: [page model id, weight file]; the first is the page's default. */
+const MODELS = [["attn", "attn-sim.dmbn"], ["dmbn", "dmbn-sim.dmbn"], ["pte", "pte-sim.dmbn"]];
+const DEFAULT = MODELS[0][0];
+const NAMES = { attn: "Attentive", dmbn: "DMBN", pte: "DMBN-PTE" };
 
 async function waitState(page, wanted) {
   await page.waitForFunction(
@@ -70,7 +74,7 @@ try {
   result.wasm_gzip_bytes = gzipSync(wasm, { level: 9 }).length;
   result.glue_bytes = glue.length;
   result.glue_gzip_bytes = gzipSync(glue, { level: 9 }).length;
-  for (const [kind, file] of [["dmbn", "dmbn-sim.dmbn"], ["pte", "pte-sim.dmbn"]]) {
+  for (const [kind, file] of MODELS) {
     const path = join(ROOT, "assets", "models", file);
     if (existsSync(path)) {
       result[`${kind}_weights_bytes`] = statSync(path).size;
@@ -78,7 +82,8 @@ try {
     }
   }
 
-  // Cold loads to `ready` (wasm compiled, episode simulated, DMBN weights fetched and parsed).
+  // Cold loads to `ready` (wasm compiled, episode simulated, the default model's weights fetched
+  // and parsed).
   const ready = [];
   const wasmMs = [];
   const modelMs = [];
@@ -90,7 +95,7 @@ try {
     const t = await page.evaluate(() => window.dmbnTimings);
     ready.push(t.ready_ms);
     wasmMs.push(t.wasm_ms);
-    modelMs.push(t.models.dmbn.fetchMs + t.models.dmbn.parseMs);
+    modelMs.push(t.models[DEFAULT].fetchMs + t.models[DEFAULT].parseMs);
     await context.close();
   }
   result.ready_ms = round(median(ready));
@@ -105,7 +110,7 @@ try {
     await waitState(page, "ready");
     await page.click("#play"); // pause the animation
   };
-  for (const kind of ["dmbn", "pte"]) {
+  for (const [kind] of MODELS) {
     await open(`model=${kind}`);
     const time = (n) => page.evaluate(([n, kind]) => window.dmbn.timePrediction(n, kind), [n, kind]);
     // Warm-up; also lets the other workers finish loading the weights in the background.
@@ -177,12 +182,12 @@ console.log(`| measure | value | goal |`);
 console.log(`|---|---|---|`);
 console.log(`| time to \`ready\` (localhost, cold cache) | ${ms(result.ready_ms)} | ≤ 2000 ms |`);
 console.log(`| … of which wasm fetch + compile + init | ${ms(result.wasm_load_ms)} | |`);
-console.log(`| … of which DMBN weights fetch + parse (worker, in parallel) | ${ms(result.model_load_ms)} | |`);
+console.log(`| … of which ${NAMES[DEFAULT]} weights fetch + parse (worker, in parallel) | ${ms(result.model_load_ms)} | |`);
 console.log(`| wasm size raw / gzip -9 | ${mb(result.wasm_bytes)} / ${mb(result.wasm_gzip_bytes)} | |`);
 console.log(`| JS glue raw / gzip -9 | ${kb(result.glue_bytes)} / ${kb(result.glue_gzip_bytes)} | |`);
-for (const kind of ["dmbn", "pte"]) {
+for (const [kind] of MODELS) {
   const r = result[kind];
-  const name = kind === "dmbn" ? "DMBN" : "DMBN-PTE";
+  const name = NAMES[kind];
   const w = r.sequence100_workers;
   console.log(`| ${name}: one predicted frame (decode; observations encoded once) | ${ms(r.one_frame_decode_ms)} | ≤ 15 ms |`);
   console.log(`| ${name}: one frame from scratch (encode 5 observations + decode 1, round trip) | ${ms(r.one_frame_ms)} | |`);

@@ -7,6 +7,7 @@ pub mod eval;
 pub mod figure;
 pub mod model;
 pub mod predict;
+pub mod quality;
 pub mod sim;
 #[cfg(not(target_arch = "wasm32"))]
 pub mod train;

@@ -6,7 +6,10 @@ use std::process::Command;
 
 use burn::tensor::Device;
 use dmbn::data::{DatasetWriter, Normalization};
-use dmbn::eval::{evenly_spaced, fit_head, mean_ci95, Encodings, HeadConfig};
+use dmbn::eval::{
+    diverged, evenly_spaced, fit_head, mean_ci95, split_warnings, time_variance, Divergence,
+    Encodings, HeadConfig, ProbeReport, ProbeResult, ProbeRow,
+};
 use dmbn::model::{self, ModelConfig, ModelKind};
 use dmbn::sim::{episode, Action};
 use rand::{RngExt, SeedableRng};
@@ -57,6 +60,142 @@ fn the_probe_head_reads_time_when_it_is_there_and_not_otherwise() {
         (0.07..0.11).contains(&without),
         "no time in the encoding: MSE {without}"
     );
+}
+
+/// `e` with feature `j` of every step (both modalities) set to `value(step)`.
+fn with_feature(mut e: Encodings, j: usize, value: impl Fn(usize) -> f32) -> Encodings {
+    let h = e.hidden;
+    for k in 0..e.times.len() {
+        e.image[k * h + j] = value(k);
+        e.joint[k * h + j] = value(k);
+    }
+    e
+}
+
+#[test]
+fn a_feature_constant_on_the_training_steps_cannot_blow_the_probe_up() {
+    let head = HeadConfig::new().with_steps(400);
+    let test_var = time_variance(&synthetic(500, true, 2).times);
+    // Near-constant on the training steps (a 1e-5 jitter: its std, ~1e-5, was the divisor)
+    // and far off on the test steps: the test inputs were ~1e5 standard deviations out.
+    for (with_time, jitter) in [(true, 1e-5f32), (false, 1e-5), (true, 0.0), (false, 0.0)] {
+        let train = with_feature(synthetic(2000, with_time, 1), 5, |k| {
+            0.5 + jitter * (k % 3) as f32
+        });
+        let test = with_feature(synthetic(500, with_time, 2), 5, |k| 1.0 + (k % 7) as f32);
+        for image in [true, false] {
+            let mse = fit_head(&train, &test, image, &head, 0);
+            assert!(
+                mse.is_finite() && mse <= 1.5 * test_var,
+                "time {with_time}, jitter {jitter}: MSE {mse} against Var(t) {test_var}"
+            );
+            if with_time {
+                assert!(mse < 5e-3, "time {with_time}, jitter {jitter}: MSE {mse}");
+            }
+        }
+    }
+    // A whole encoding on a tiny scale is standardised as usual (the floor is relative).
+    let tiny = |mut e: Encodings| {
+        e.image.iter_mut().for_each(|v| *v *= 1e-5);
+        e
+    };
+    let mse = fit_head(
+        &tiny(synthetic(2000, true, 1)),
+        &tiny(synthetic(500, true, 2)),
+        true,
+        &head,
+        0,
+    );
+    assert!(mse < 5e-3, "encoding ×1e-5: MSE {mse}");
+    // Non-finite values and empty sets give numbers or NaN, never a panic.
+    let train = with_feature(synthetic(300, true, 1), 2, |k| {
+        if k % 10 == 0 {
+            f32::NAN
+        } else {
+            0.1
+        }
+    });
+    assert!(fit_head(&train, &synthetic(50, true, 2), true, &head, 0).is_finite());
+    let empty = Encodings {
+        hidden: 8,
+        image: Vec::new(),
+        joint: Vec::new(),
+        times: Vec::new(),
+    };
+    assert!(fit_head(&empty, &synthetic(50, true, 2), true, &head, 0).is_nan());
+    assert!(fit_head(&synthetic(50, true, 2), &empty, false, &head, 0).is_nan());
+}
+
+#[test]
+fn diverged_heads_and_small_splits_are_flagged() {
+    let uniform: Vec<f32> = (0..=100).map(|k| k as f32 / 100.0).collect();
+    let var = time_variance(&uniform);
+    assert!((var - 0.0850).abs() < 1e-3, "{var}");
+    assert!(time_variance(&[]).is_nan());
+    assert!(!diverged(0.05, var) && !diverged(0.16, var));
+    assert!(diverged(0.2, var) && diverged(19.99, var));
+    assert!(diverged(f64::NAN, var) && diverged(f64::INFINITY, var));
+
+    let row = |row, image: &[f64], joint: &[f64], bad: Vec<Divergence>| ProbeResult {
+        row,
+        image: mean_ci95(image),
+        joint: mean_ci95(joint),
+        image_mse: image.to_vec(),
+        joint_mse: joint.to_vec(),
+        diverged: bad,
+    };
+    let report = ProbeReport {
+        rows: vec![
+            row(
+                ProbeRow::Null,
+                &[0.02, 0.03],
+                &[19.99, 0.05],
+                vec![Divergence {
+                    modality: "joint",
+                    seed: 0,
+                    mse: 19.99,
+                }],
+            ),
+            row(ProbeRow::Pte, &[1e-4, 2e-4], &[1e-4, 1e-4], Vec::new()),
+        ],
+        train_sequences: 16,
+        test_sequences: 4,
+        train_steps: 930,
+        test_steps: 230,
+        test_time_variance: var,
+        divergence_limit: 2.0 * var,
+        seeds: 2,
+        seconds: 1.0,
+        warnings: vec!["Null joint: 1 of 2 heads diverged".into()],
+    };
+    assert_eq!(report.rows[0].diverged_seeds("joint"), vec![0]);
+    assert!(report.rows[0].diverged_seeds("image").is_empty());
+    let md = report.markdown();
+    assert!(
+        md.contains("| Null | 25.00 (") && md.contains(") ⚠ |"),
+        "{md}"
+    );
+    assert!(
+        md.contains("| DMBN-PTE | 0.15 (") && !md.contains("0.10) ⚠"),
+        "{md}"
+    );
+    assert!(
+        md.contains("Var(t) of the 230 test steps: 85.00 ×1e-3"),
+        "{md}"
+    );
+    assert!(md.contains("- Null joint: 1 of 2 heads diverged"), "{md}");
+    let json = serde_json::to_value(&report).unwrap();
+    assert_eq!(json["rows"][0]["diverged"][0]["modality"], "joint");
+    assert!((json["test_time_variance"].as_f64().unwrap() - var).abs() < 1e-12);
+
+    // The split: 8 training ids, 2 test ids of ~290 steps.
+    let w = split_warnings(8, 1150, 2, 291);
+    assert_eq!(w.len(), 1, "{w:?}");
+    assert!(w[0].contains("only 2 test id(s)"), "{w:?}");
+    let w = split_warnings(2, 200, 1, 60);
+    assert_eq!(w.len(), 3, "{w:?}");
+    assert!(w[1].contains("60 test steps") && w[2].contains("only 2 training id(s)"));
+    assert!(split_warnings(32, 4000, 8, 900).is_empty());
 }
 
 #[test]
@@ -201,6 +340,141 @@ fn dmbn_eval_and_probe_run_end_to_end() {
     let stderr = String::from_utf8_lossy(&run.stderr);
     assert!(
         !run.status.success() && stderr.contains("expected dmbn"),
+        "{stderr}"
+    );
+}
+
+/// A dataset of grasp episodes with the given ids (simulator seed 40 + id).
+fn write_dataset(root: &std::path::Path, ids: &[u32]) {
+    let mut writer = DatasetWriter::create(root).unwrap();
+    for &id in ids {
+        writer
+            .write(
+                id,
+                "grasp",
+                &episode(Action::Grasp, 40 + id as u64, 64).unwrap(),
+            )
+            .unwrap();
+    }
+    writer.finish().unwrap();
+}
+
+#[test]
+fn dmbn_probe_tests_on_an_id_range_or_a_second_dataset() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (data, other) = (tmp.path().join("data"), tmp.path().join("other"));
+    write_dataset(&data, &[0, 1, 2, 3]);
+    write_dataset(&other, &[7]);
+    let device = Device::flex();
+    let mut paths = Vec::new();
+    for kind in [ModelKind::Dmbn, ModelKind::Pte] {
+        let path = tmp.path().join(format!("{kind}.dmbn"));
+        let m = ModelConfig::new(kind).init(&device).unwrap();
+        model::save(&path, &m, &Normalization::identity(), true).unwrap();
+        paths.push(path.to_str().unwrap().to_string());
+    }
+    let (d, o) = (data.to_str().unwrap(), other.to_str().unwrap());
+    let out = tmp.path().join("probe");
+    let probe = |extra: &[&str]| {
+        let mut args = vec![
+            "probe",
+            "--data",
+            d,
+            "--dmbn",
+            &paths[0],
+            "--pte",
+            &paths[1],
+            "--seeds",
+            "1",
+            "--head-steps",
+            "20",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        args.extend(extra);
+        dmbn(&args)
+    };
+    let json = || -> serde_json::Value {
+        serde_json::from_slice(&std::fs::read(out.join("probe.json")).unwrap()).unwrap()
+    };
+
+    // Fit on ids 0-1 and 3, test on id 2.
+    let run = probe(&["--test-ids", "2-2"]);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("(ids 0-1, 3), testing on 1 sequences"),
+        "{stderr}"
+    );
+    assert!(
+        stderr.contains("warning: only 1 test id(s)")
+            && stderr.contains("warning: only 3 training id(s)"),
+        "{stderr}"
+    );
+    let j = json();
+    assert_eq!(j["split"]["by"], "test-ids");
+    assert_eq!(j["split"]["train_ids"], serde_json::json!([0, 1, 3]));
+    assert_eq!(j["split"]["test_ids"], serde_json::json!([2]));
+    assert_eq!(
+        (j["train_sequences"].as_u64(), j["test_sequences"].as_u64()),
+        (Some(3), Some(1))
+    );
+    assert!(j["test_time_variance"].as_f64().unwrap() > 0.05);
+    assert!(j["warnings"].as_array().unwrap().len() >= 2, "{j}");
+    let md = std::fs::read_to_string(out.join("probe.md")).unwrap();
+    assert!(
+        md.contains("| DMBN-PTE |") && md.contains("Var(t) of the"),
+        "{md}"
+    );
+    assert!(
+        md.contains("Warnings:") && md.contains("only 1 test id(s)"),
+        "{md}"
+    );
+
+    // Fit on all of --data, test on the other dataset.
+    let run = probe(&["--test-data", o]);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{stderr}");
+    let j = json();
+    assert_eq!(j["split"]["by"], "test-data");
+    assert_eq!(j["split"]["train_ids"], serde_json::json!([0, 1, 2, 3]));
+    assert_eq!(j["split"]["test_ids"], serde_json::json!([7]));
+    assert_eq!(j["split"]["test_data"], o);
+
+    // Bad values: clear errors naming the flag, no panic.
+    for (extra, expected) in [
+        (vec!["--test-ids", "3-1"], "A (3) must not exceed B (1)"),
+        (vec!["--test-ids", "x"], "is not an id range A-B"),
+        (vec!["--test-ids", "10-20"], "--test-ids 10-20: "),
+        (
+            vec!["--test-ids", "0-3"],
+            "none is left to fit the heads on",
+        ),
+        (
+            vec!["--test-ids", "1-2", "--test-data", o],
+            "cannot be used with",
+        ),
+        (
+            vec!["--test-ids", "1-2", "--test-fraction", "0.5"],
+            "cannot be used with",
+        ),
+        (
+            vec!["--test-data", "/nonexistent/dmbn"],
+            "--test-data: /nonexistent/dmbn",
+        ),
+        (vec!["--test-fraction", "1.5"], "strictly between 0 and 1"),
+    ] {
+        let run = probe(&extra);
+        let stderr = String::from_utf8_lossy(&run.stderr);
+        assert!(
+            !run.status.success() && stderr.contains(expected) && !stderr.contains("panicked"),
+            "{extra:?}: {stderr}"
+        );
+    }
+    let run = probe(&["--test-ids", "10-20"]);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(
+        stderr.contains("no sequence with an id in 10..=20 (its ids: 0-3)"),
         "{stderr}"
     );
 }

@@ -73,9 +73,16 @@ fn loss_falls_when_overfitting_a_tiny_dataset() {
         assert!(path.exists());
         let m = metrics(&out);
         assert_eq!(m.len(), 30);
-        let mean = |s: &[Metrics]| s.iter().map(|x| x.loss).sum::<f32>() / s.len() as f32;
-        let (first, last) = (mean(&m[..5]), mean(&m[25..]));
+        let mean =
+            |s: &[Metrics], f: fn(&Metrics) -> f32| s.iter().map(f).sum::<f32>() / s.len() as f32;
+        let (first, last) = (mean(&m[..5], |x| x.loss), mean(&m[25..], |x| x.loss));
         assert!(last < first - 0.05, "{model}: loss {first} -> {last}");
+        // Not only σ shrinking: the predicted frames get closer to the targets.
+        let (first, last) = (
+            mean(&m[..5], |x| x.image_mse),
+            mean(&m[25..], |x| x.image_mse),
+        );
+        assert!(last < 0.95 * first, "{model}: image MSE {first} -> {last}");
     }
 }
 

@@ -5,6 +5,8 @@
 mod golden;
 #[path = "golden/prediction.rs"]
 mod golden_prediction;
+#[path = "golden/score.rs"]
+mod golden_score;
 
 use dmbn::web::{placement_region, run_episode, Episode, ModelHandle, Prediction, Simulator};
 use wasm_bindgen::{JsError, JsValue};
@@ -281,4 +283,36 @@ fn encode_then_decode_in_chunks_matches_predict() {
         .map(|(a, b)| (a - b).abs())
         .fold(0.0, f32::max);
     assert!(diff < 1e-4, "encode/decode and predict differ by {diff}");
+}
+
+#[wasm_bindgen_test]
+fn scores_match_native_within_1e_4() {
+    #[derive(serde::Deserialize)]
+    struct Scores {
+        model: dmbn::quality::Quality,
+        baseline: dmbn::quality::Quality,
+    }
+    let model = ModelHandle::from_bytes(golden_score::MODEL).unwrap();
+    let ep = run_episode("grasp".into(), golden_score::SEED as f64, 64).unwrap();
+    let expected = golden_score::expected();
+    assert_eq!(expected.len(), golden_score::SCENARIOS.len());
+    for (scenario, want) in golden_score::SCENARIOS.iter().zip(&expected) {
+        let value = model
+            .score(
+                &ep,
+                scenario.name(),
+                golden_score::OBSERVATIONS,
+                golden_score::BLEND,
+            )
+            .expect("valid arguments");
+        let scores: Scores = serde_wasm_bindgen::from_value(value).expect("{model, baseline}");
+        let got = golden_score::sample(&scores.model, &scores.baseline);
+        let (diff, at) = golden_score::max_diff(&got, want);
+        assert!(
+            diff < 1e-4,
+            "{scenario}: wasm and native differ by {diff} at {at}"
+        );
+    }
+    let err = model.score(&ep, "all", 5, 0.5).map(|_| ()).unwrap_err();
+    assert!(message(err).contains("interp or extrap"));
 }

@@ -1,5 +1,6 @@
 // DMBN web demo: simulate an episode in WebAssembly (main thread), pick observations, and let
-// DMBN or DMBN-PTE predict the whole sequence, with σ, in a Web Worker.
+// one of the shipped models (the attentive model by default, DMBN, DMBN-PTE, DMBN-PTE trained
+// with time warps) predict the whole sequence, with σ, in a Web Worker.
 // Plain ES modules, no bundler: the `wasm-pack build --release --target web` output is
 // expected in ../pkg/ and the weights in ../assets/models/ (relative URLs, so the page works
 // under any path prefix). See www/README.md.
@@ -14,15 +15,30 @@ const STEPS_PER_SECOND = 20;
 /** Target times per predict call: the sequence fills in by this many steps at a time. */
 const CHUNK = 10;
 const BLENDS = { images: 1, joints: 0, both: 0.5 };
-const MODEL_NAMES = { dmbn: "DMBN", pte: "DMBN-PTE" };
+/**
+ * The models the page offers, by id (the `#model` option values, the `model=` URL state, and
+ * the key of the weights, loading and caching): the label, the kind the file must hold (what
+ * `Model.kind` says) and the shipped file. The first is the default: the best model.
+ */
+const MODELS = {
+  attn: { name: "Attentive (DMBN-PTE + attention)", kind: "attn", file: "attn-sim.dmbn" },
+  dmbn: { name: "DMBN", kind: "dmbn", file: "dmbn-sim.dmbn" },
+  pte: { name: "DMBN-PTE", kind: "pte", file: "pte-sim.dmbn" },
+  "pte-aug": { name: "DMBN-PTE + time warps", kind: "pte", file: "pte-aug-sim.dmbn" },
+};
+const MODEL_NAMES = Object.fromEntries(Object.entries(MODELS).map(([id, m]) => [id, m.name]));
+/** What a model file holds (`Model.kind`), in words, for the mismatch note. */
+const KIND_NAMES = { attn: "attentive", dmbn: "DMBN", pte: "DMBN-PTE" };
 const MODE_NAMES = { t: "t (unchanged)", p: "p (time stamps permuted)", f: "f (frozen)" };
 
 const params = new URLSearchParams(location.search);
-/** Weight files, overridable for tests and experiments: `?dmbn=URL&pte=URL` (relative to the page). */
-const WEIGHTS = {
-  dmbn: new URL(params.get("dmbn") ?? "../assets/models/dmbn-sim.dmbn", location.href).href,
-  pte: new URL(params.get("pte") ?? "../assets/models/pte-sim.dmbn", location.href).href,
-};
+/**
+ * Weight files by model id, each overridable for tests and experiments by a parameter named
+ * after the id: `?attn=URL`, `?dmbn=URL`, `?pte=URL`, `?pte-aug=URL` (relative to the page).
+ */
+const WEIGHTS = Object.fromEntries(
+  Object.entries(MODELS).map(([id, m]) => [id, new URL(params.get(id) ?? `../assets/models/${m.file}`, location.href).href]),
+);
 /** Inference workers: one per core, at most 4 (`?workers=N`, 1 to 8). */
 const WORKERS = Math.min(8, Math.max(1, Math.round(Number(params.get("workers"))) || Math.min(4, navigator.hardwareConcurrency || 2)));
 /** Debugging / screenshots: a pause in ms between predicted chunks (`?chunkDelay=200`). */
@@ -251,18 +267,18 @@ class Inference {
   }
 
   /**
-   * Loads a model file in the first worker, resolving with its report, then in the others in
-   * the background (so that loading does not delay the page); predictions use the workers
-   * that have it.
+   * Loads model `model` (an id of MODELS) from `url` in the first worker, resolving with its
+   * report, then in the others in the background (so that loading does not delay the page);
+   * predictions use the workers that have it.
    */
-  async load(kind, url) {
+  async load(model, url) {
     const [first] = this.workers;
-    const reply = await this.send(first, { type: "load", kind, url }).done;
-    first.models.add(kind);
+    const reply = await this.send(first, { type: "load", model, url }).done;
+    first.models.add(model);
     while (this.workers.length < this.count) this.spawn();
     for (const w of this.workers.slice(1)) {
-      this.send(w, { type: "load", kind, url }).done.then(
-        () => w.models.add(kind),
+      this.send(w, { type: "load", model, url }).done.then(
+        () => w.models.add(model),
         () => {}, // the first worker loaded the same file: this one just stays out of it
       );
     }
@@ -270,14 +286,14 @@ class Inference {
   }
 
   /**
-   * Predicts `targets` from the observations in chunks of `chunk` steps spread over the
-   * workers; `onChunk({start, count, mean, sigma, jointMean, jointSigma})` gets each chunk
-   * (`start` a step index of `targets`) as it arrives. Returns {done, cancel}: `done` resolves
+   * Predicts `targets` with model `model` (an id) from the observations in chunks of `chunk`
+   * steps spread over the workers; `onChunk({start, count, mean, sigma, jointMean, jointSigma})`
+   * gets each chunk (`start` a step index of `targets`) as it arrives. Returns {done, cancel}: `done` resolves
    * with {type: "done" | "cancelled", encodeMs, decodeMs, workers} (the slowest worker's
    * times) or rejects with the first failure.
    */
-  predict({ kind, frames, joints, times, targets, blend, chunk, delay }, onChunk) {
-    const workers = this.workers.filter((w) => w.models.has(kind));
+  predict({ model, frames, joints, times, targets, blend, chunk, delay }, onChunk) {
+    const workers = this.workers.filter((w) => w.models.has(model));
     const chunks = Math.ceil(targets.length / chunk);
     const active = Math.max(1, Math.min(workers.length, chunks));
     const requests = [];
@@ -291,7 +307,7 @@ class Inference {
       requests.push(
         this.send(
           workers[w],
-          { type: "predict", kind, frames: copies[0], joints: copies[1], times: copies[2], targets: part, blend, chunk, delay },
+          { type: "predict", model, frames: copies[0], joints: copies[1], times: copies[2], targets: part, blend, chunk, delay },
           [...copies.map((a) => a.buffer), part.buffer],
           (msg) => onChunk({ ...msg, start: toGlobal(msg.start) }),
         ),
@@ -315,59 +331,61 @@ class Inference {
 }
 
 const models = {
-  /** kind → Promise of the loaded reply. */
+  /** model id → Promise of the loaded reply. */
   requests: new Map(),
   loaded: new Set(),
-  load(kind) {
-    let p = this.requests.get(kind);
+  load(id) {
+    let p = this.requests.get(id);
     if (!p) {
-      p = inference.load(kind, WEIGHTS[kind]).then(
+      p = inference.load(id, WEIGHTS[id]).then(
         (info) => {
           if (info.imageSize !== IMAGE_SIZE) {
             throw new Error(
-              `The ${MODEL_NAMES[kind]} weights (${WEIGHTS[kind]}) are for ${info.imageSize}×${info.imageSize} frames; this page simulates ${IMAGE_SIZE}×${IMAGE_SIZE}.`,
+              `The ${MODEL_NAMES[id]} weights (${WEIGHTS[id]}) are for ${info.imageSize}×${info.imageSize} frames; this page simulates ${IMAGE_SIZE}×${IMAGE_SIZE}.`,
             );
           }
-          timings.models[kind] = info;
-          this.loaded.add(kind);
+          timings.models[id] = info;
+          this.loaded.add(id);
           return info;
         },
       );
       // Failures are not kept: choosing the model again retries.
-      p.catch(() => this.requests.delete(kind));
-      this.requests.set(kind, p);
+      p.catch(() => this.requests.delete(id));
+      this.requests.set(id, p);
     }
     return p;
   },
 };
 
-function describeModel(kind) {
-  const info = timings.models[kind];
+function describeModel(id) {
+  const info = timings.models[id];
   if (!info) return "";
-  const file = decodeURIComponent(new URL(WEIGHTS[kind]).pathname.split("/").pop());
-  const mismatch = info.fileKind !== kind ? ` — note: the file holds a ${MODEL_NAMES[info.fileKind] ?? info.fileKind} model` : "";
-  return `${MODEL_NAMES[kind]} ready: ${file}, ${(info.bytes / 1e6).toFixed(1)} MB, loaded in ${Math.round(info.fetchMs + info.parseMs)} ms${mismatch}`;
+  const file = decodeURIComponent(new URL(WEIGHTS[id]).pathname.split("/").pop());
+  // The file should hold the kind of model the id names (pte-aug: a DMBN-PTE).
+  const mismatch =
+    info.fileKind !== MODELS[id].kind ? ` — note: the file holds a ${KIND_NAMES[info.fileKind] ?? info.fileKind} model` : "";
+  return `${MODEL_NAMES[id]} ready: ${file}, ${(info.bytes / 1e6).toFixed(1)} MB, loaded in ${Math.round(info.fetchMs + info.parseMs)} ms${mismatch}`;
 }
 
 /** Makes the chosen model available; shows progress and errors. */
 async function selectModel() {
-  const kind = ui.model.value;
-  if (!models.loaded.has(kind)) {
+  const id = ui.model.value;
+  if (!models.loaded.has(id)) {
     setState("loading");
-    ui.status.textContent = `Loading the ${MODEL_NAMES[kind]} weights…`;
+    ui.status.textContent = `Loading the ${MODEL_NAMES[id]} weights…`;
   }
   try {
-    await models.load(kind);
+    await models.load(id);
   } catch (err) {
-    if (ui.model.value === kind) {
+    if (ui.model.value === id) {
       ui.status.textContent = "";
       showError(err);
     }
     return false;
   }
-  if (ui.model.value !== kind) return false;
+  if (ui.model.value !== id) return false;
   clearError();
-  ui.status.textContent = describeModel(kind);
+  ui.status.textContent = describeModel(id);
   return true;
 }
 
@@ -555,7 +573,7 @@ async function predict() {
   }
   live = true;
   cancelPrediction();
-  const kind = ui.model.value;
+  const model = ui.model.value;
   const mode = shown.mode;
   const observe = ui.observe.value;
   const blend = BLENDS[observe];
@@ -567,7 +585,7 @@ async function predict() {
   const targets = Float32Array.from(shown.times);
   const len = targets.length;
   const p = {
-    kind,
+    model,
     mode,
     observe,
     len,
@@ -596,7 +614,7 @@ async function predict() {
   const t0 = performance.now();
   p.start = t0;
   const run = inference.predict(
-    { kind, frames, joints, times, targets, blend, chunk: CHUNK, delay: CHUNK_DELAY },
+    { model, frames, joints, times, targets, blend, chunk: CHUNK, delay: CHUNK_DELAY },
     (chunk) => receiveChunk(p, chunk),
   );
   p.cancel = run.cancel;
@@ -617,7 +635,7 @@ async function predict() {
   // A counter that automation can wait on: it changes with every finished prediction.
   document.body.dataset.predictions = String(Number(document.body.dataset.predictions ?? 0) + 1);
   timings.prediction = {
-    model: kind,
+    model,
     mode,
     observe,
     observed: n,
@@ -633,7 +651,7 @@ async function predict() {
   ui.timing.textContent =
     `${len} steps in ${Math.round(p.totalMs)} ms (${(p.totalMs / len).toFixed(1)} ms per frame) · ` +
     `first ${Math.min(CHUNK, len)} after ${Math.round(p.firstMs)} ms · ${reply.workers} worker${reply.workers > 1 ? "s" : ""}`;
-  ui.timing.title = `${MODEL_NAMES[kind]}, mode ${mode}, ${observe}, ${n} observed steps; encoding ${Math.round(reply.encodeMs)} ms`;
+  ui.timing.title = `${MODEL_NAMES[model]}, mode ${mode}, ${observe}, ${n} observed steps; encoding ${Math.round(reply.encodeMs)} ms`;
   render();
   settle();
 }
@@ -922,16 +940,20 @@ function wire() {
   sigmaOverlay();
 }
 
-/** For bench/page.mjs: times `n` target steps (evenly spaced phases) on the current observations,
- * through the same worker path and chunking as the page, without drawing. */
-async function timePrediction(n, kind = ui.model.value, chunk = CHUNK) {
-  await models.load(kind);
+/** For bench/page.mjs: times `n` target steps (evenly spaced phases) with model `model` (an id of
+ * MODELS: attn, dmbn, pte, pte-aug) on the current observations, through the same worker path and
+ * chunking as the page, without drawing. */
+async function timePrediction(n, model = ui.model.value, chunk = CHUNK) {
+  if (!Object.hasOwn(MODELS, model)) {
+    throw new Error(`timePrediction: unknown model ${JSON.stringify(model)} (one of ${Object.keys(MODELS).join(", ")})`);
+  }
+  await models.load(model);
   const { frames, joints, times } = observations(observedSteps());
   const targets = Float32Array.from({ length: n }, (_, i) => (n > 1 ? i / (n - 1) : 0.5));
   const t0 = performance.now();
   let first = null;
   const reply = await inference.predict(
-    { kind, frames, joints, times, targets, blend: BLENDS[ui.observe.value], chunk, delay: 0 },
+    { model, frames, joints, times, targets, blend: BLENDS[ui.observe.value], chunk, delay: 0 },
     () => (first ??= performance.now() - t0),
   ).done;
   return {
@@ -978,7 +1000,8 @@ async function main() {
     generate(null);
   }
   observationsChanged();
-  ui.status.textContent = `Loading the ${MODEL_NAMES[ui.model.value]} weights…`;
+  // (The weights may be in already: then selectModel has described them.)
+  if (!models.loaded.has(ui.model.value)) ui.status.textContent = `Loading the ${MODEL_NAMES[ui.model.value]} weights…`;
   if (await modelReady) {
     timings.ready_ms = performance.now();
     settle();

@@ -1,17 +1,19 @@
-// Inference worker: loads the model files and runs DMBN / DMBN-PTE predictions in WebAssembly,
-// off the page's main thread. The observations are encoded once (Model.encode), then
+// Inference worker: loads the model files and runs their predictions (the attentive model, DMBN,
+// DMBN-PTE, DMBN-PTE + time warps) in WebAssembly, off the page's main thread. The observations are encoded once (Model.encode), then
 // the target times are decoded in chunks whose results go back as they come, typed arrays
 // transferred (not copied), so the page fills the predicted sequence in progressively.
 //
+// `model` is the page's model id (attn, dmbn, pte, pte-aug): it keys the loaded files; what a
+// file holds is `fileKind` (Model.kind: "attn", "dmbn" or "pte").
 // Messages in (all carry an `id`; replies echo it):
 //   {type: "init", module}                  the compiled WebAssembly.Module from the page
-//   {type: "load", kind, url}               fetch and parse a model file (kept for later)
-//   {type: "predict", kind, frames, joints, times, targets, blend, chunk, delay}
+//   {type: "load", model, url}              fetch and parse a model file (kept for later)
+//   {type: "predict", model, frames, joints, times, targets, blend, chunk, delay}
 //                                           a new predict cancels the running one
 //   {type: "cancel", target}                stop prediction `target` if it is running
 // Messages out:
 //   {type: "inited", id}
-//   {type: "loaded", id, kind, fileKind, imageSize, bytes, fetchMs, parseMs}
+//   {type: "loaded", id, model, fileKind, imageSize, bytes, fetchMs, parseMs}
 //   {type: "chunk", id, start, count, mean, sigma, jointMean, jointSigma, ms}
 //   {type: "done", id, ms, encodeMs, steps}
 //   {type: "error", id, message}
@@ -22,7 +24,7 @@ const wasmReady = new Promise((resolve) => {
   initWasm = resolve;
 });
 
-/** kind → Promise of {model, url, info}: each file is fetched and parsed once. */
+/** model id → {url, promise of {model, url, info}}: each file is fetched and parsed once. */
 const models = new Map();
 /** Id of the prediction allowed to run; any other running loop stops at its next chunk. */
 let current = null;
@@ -38,7 +40,7 @@ self.onmessage = async (e) => {
         post({ type: "inited", id: msg.id });
         break;
       case "load": {
-        const { info } = await load(msg.kind, msg.url);
+        const { info } = await load(msg.model, msg.url);
         post({ type: "loaded", id: msg.id, ...info });
         break;
       }
@@ -67,22 +69,28 @@ async function init(module) {
   }
 }
 
-function load(kind, url) {
-  const cached = models.get(kind);
+function load(id, url) {
+  const cached = models.get(id);
   if (cached && cached.url === url) return cached.promise;
-  const promise = fetchModel(kind, url);
-  models.set(kind, { url, promise });
+  const promise = fetchModel(id, url);
+  models.set(id, { url, promise });
   // A failed load is not cached: the next request tries again (the file may have appeared).
   promise.catch(() => {
-    if (models.get(kind)?.promise === promise) models.delete(kind);
+    if (models.get(id)?.promise === promise) models.delete(id);
   });
   return promise;
 }
 
-const NAMES = { dmbn: "DMBN", pte: "DMBN-PTE" };
+/** The page's model ids, in words (as MODELS in main.js). */
+const NAMES = {
+  attn: "Attentive (DMBN-PTE + attention)",
+  dmbn: "DMBN",
+  pte: "DMBN-PTE",
+  "pte-aug": "DMBN-PTE + time warps",
+};
 
-async function fetchModel(kind, url) {
-  const name = `the ${NAMES[kind] ?? kind} weights`;
+async function fetchModel(id, url) {
+  const name = `the ${NAMES[id] ?? id} weights`;
   const t0 = performance.now();
   let response;
   try {
@@ -104,7 +112,7 @@ async function fetchModel(kind, url) {
     throw new Error(`${name[0].toUpperCase()}${name.slice(1)} at ${url} are corrupt or not a model file: ${err.message ?? err}`);
   }
   const info = {
-    kind,
+    model: id,
     fileKind: model.kind,
     imageSize: model.imageSize,
     bytes: bytes.length,
@@ -120,9 +128,9 @@ function yieldToMessages(delay) {
 }
 
 async function predict(msg) {
-  const { id, kind, frames, joints, times, targets, blend } = msg;
-  const entry = models.get(kind);
-  if (!entry) throw new Error(`the ${NAMES[kind] ?? kind} model is not loaded`);
+  const { id, frames, joints, times, targets, blend } = msg;
+  const entry = models.get(msg.model);
+  if (!entry) throw new Error(`the ${NAMES[msg.model] ?? msg.model} model is not loaded`);
   const { model } = await entry.promise;
   if (current !== id) return;
   const chunk = Math.max(1, msg.chunk | 0);

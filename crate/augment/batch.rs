@@ -30,6 +30,40 @@ pub struct Batch {
     pub blend: Vec<f32>,
 }
 
+impl Batch {
+    /// The same contexts with themselves as targets (N targets per sequence, each sequence's
+    /// real contexts repeated in order to fill the padding slots): how well a model reproduces
+    /// what it observed.
+    pub fn contexts_as_targets(&self) -> Batch {
+        let (b, n) = (self.batch, self.contexts);
+        let px = 3 * self.image_size * self.image_size;
+        let joints = self.context_joints.len() / (b * n).max(1);
+        let mut out = Batch {
+            targets: n,
+            target_images: vec![0.0; b * n * px],
+            target_joints: vec![0.0; b * n * joints],
+            target_times: vec![0.0; b * n],
+            ..self.clone()
+        };
+        for s in 0..b {
+            let real = self.context_mask[s * n..(s + 1) * n]
+                .iter()
+                .filter(|&&m| m == 1.0)
+                .count()
+                .max(1);
+            for j in 0..n {
+                let (from, to) = (s * n + j % real, s * n + j);
+                out.target_images[to * px..(to + 1) * px]
+                    .copy_from_slice(&self.context_images[from * px..(from + 1) * px]);
+                out.target_joints[to * joints..(to + 1) * joints]
+                    .copy_from_slice(&self.context_joints[from * joints..(from + 1) * joints]);
+                out.target_times[to] = self.context_times[from];
+            }
+        }
+        out
+    }
+}
+
 /// Interleaved RGB bytes (`S × S × 3`) to channels-first floats in [0, 1] (`3 × S × S`).
 pub fn planar(rgb: &[u8], s: usize, out: &mut [f32]) {
     let plane = s * s;

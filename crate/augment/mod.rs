@@ -3,10 +3,12 @@
 //! ([`EvalSequence`]: t, p, f). Compiled for wasm too (the page shows p and f sequences).
 mod batch;
 mod eval_sequence;
+mod joint_targets;
 mod sampler;
 mod time_warp;
 
 pub use batch::{planar, Batch};
 pub use eval_sequence::{EvalMode, EvalSequence};
+pub use joint_targets::JointTargets;
 pub use sampler::{Sampler, SamplerConfig};
 pub use time_warp::{gather, TimeWarpConfig};

@@ -4,7 +4,7 @@ use rand_pcg::Pcg64;
 
 use crate::data::{Normalization, Sequence, JOINTS};
 
-use super::{planar, Batch, TimeWarpConfig};
+use super::{planar, Batch, JointTargets, TimeWarpConfig};
 
 /// How training batches are drawn (the original drew one sequence, 1-5 contexts and one
 /// target per step; we batch several sequences and targets).
@@ -14,8 +14,15 @@ pub struct SamplerConfig {
     pub batch: usize,
     /// Largest context count; each sequence gets n ~ U{1..max_contexts} (N = max_contexts).
     pub max_contexts: usize,
-    /// Targets per sequence (M), distinct from the contexts where the sequence allows.
+    /// Targets per sequence (M): distinct from the contexts where the sequence allows, or,
+    /// with `contexts_in_targets`, the contexts first, then other steps.
     pub targets: usize,
+    /// Targets ⊇ contexts (the reference CNP's training): the model is also scored on
+    /// reconstructing what it observed, the signal a CNP that underfits its contexts lacks.
+    pub contexts_in_targets: bool,
+    /// Joint-only targets per sequence, drawn uniformly from all its steps (see
+    /// [`JointTargets`]); 0 for none.
+    pub joint_targets: usize,
     /// Time-warp every drawn sequence first (the paper's augmentation), or not.
     pub warp: Option<TimeWarpConfig>,
 }
@@ -35,7 +42,24 @@ impl Sampler {
     /// A batch of `config.batch` sequences picked uniformly from `pool`, with random context
     /// counts, steps and blending coefficients c ~ U(0, 1).
     pub fn sample(&self, pool: &[Sequence], norm: &Normalization, rng: &mut Pcg64) -> Batch {
+        self.sample_with_joints(pool, norm, rng).0
+    }
+
+    /// [`Sampler::sample`] with `config.joint_targets` joint-only targets per sequence (the
+    /// random stream is the same as `sample`'s when there are none).
+    pub fn sample_with_joints(
+        &self,
+        pool: &[Sequence],
+        norm: &Normalization,
+        rng: &mut Pcg64,
+    ) -> (Batch, JointTargets) {
         let cfg = self.config;
+        let mut joint_targets = JointTargets {
+            batch: cfg.batch,
+            targets: cfg.joint_targets,
+            times: Vec::with_capacity(cfg.batch * cfg.joint_targets),
+            joints: Vec::with_capacity(cfg.batch * cfg.joint_targets * JOINTS),
+        };
         let picks: Vec<&Sequence> = (0..cfg.batch)
             .map(|_| &pool[rng.random_range(0..pool.len())])
             .collect();
@@ -52,20 +76,36 @@ impl Sampler {
             let n = rng.random_range(1..=cfg.max_contexts.min(t.saturating_sub(1)).max(1));
             let steps = index::sample(rng, t, (n + cfg.targets).min(t)).into_vec();
             let (contexts, rest) = steps.split_at(n);
-            // Short sequences: reuse non-context steps as targets.
-            let targets: Vec<usize> = (0..cfg.targets)
-                .map(|m| {
-                    if rest.is_empty() {
-                        contexts[0]
-                    } else {
-                        rest[m % rest.len()]
-                    }
-                })
-                .collect();
+            let targets: Vec<usize> = if cfg.contexts_in_targets {
+                contexts
+                    .iter()
+                    .chain(rest)
+                    .cycle()
+                    .take(cfg.targets)
+                    .copied()
+                    .collect()
+            } else {
+                // Short sequences: reuse non-context steps as targets.
+                (0..cfg.targets)
+                    .map(|m| {
+                        if rest.is_empty() {
+                            contexts[0]
+                        } else {
+                            rest[m % rest.len()]
+                        }
+                    })
+                    .collect()
+            };
             fill(&mut batch, b, seq, contexts, &targets, norm);
             batch.blend[b] = rng.random_range(0.0f32..=1.0);
+            let times = seq.times();
+            for _ in 0..cfg.joint_targets {
+                let k = rng.random_range(0..t);
+                joint_targets.times.push(times[k]);
+                joint_targets.joints.extend(norm.normalize(&seq.joints[k]));
+            }
         }
-        batch
+        (batch, joint_targets)
     }
 
     /// The inference batch for one sequence: observe `contexts` (step indices) with blend `c`,
@@ -162,6 +202,8 @@ mod tests {
             batch: 16,
             max_contexts: 5,
             targets: 4,
+            contexts_in_targets: false,
+            joint_targets: 0,
             warp: None,
         });
         let mut rng = Pcg64::seed_from_u64(1);
@@ -190,6 +232,43 @@ mod tests {
             &mut Pcg64::seed_from_u64(1),
         );
         assert_eq!(batch, again, "deterministic for a seed");
+    }
+
+    #[test]
+    fn contexts_lead_the_targets_when_asked() {
+        let pool = vec![seq(20), seq(30)];
+        let sampler = Sampler::new(SamplerConfig {
+            batch: 16,
+            max_contexts: 5,
+            targets: 8,
+            contexts_in_targets: true,
+            joint_targets: 0,
+            warp: None,
+        });
+        let batch = sampler.sample(
+            &pool,
+            &Normalization::identity(),
+            &mut Pcg64::seed_from_u64(2),
+        );
+        for b in 0..16 {
+            let n = batch.context_mask[b * 5..b * 5 + 5]
+                .iter()
+                .filter(|&&v| v == 1.0)
+                .count();
+            let target = |j: usize| batch.target_joints[(b * 8 + j) * 7];
+            for i in 0..n {
+                assert_eq!(target(i), batch.context_joints[(b * 5 + i) * 7]);
+                assert_eq!(
+                    batch.target_times[b * 8 + i],
+                    batch.context_times[b * 5 + i]
+                );
+            }
+            let ctx: Vec<f32> = (0..n)
+                .map(|i| batch.context_joints[(b * 5 + i) * 7])
+                .collect();
+            let others: Vec<f32> = (n..8).map(target).collect();
+            assert!(others.iter().all(|v| !ctx.contains(v)), "then other steps");
+        }
     }
 
     #[test]

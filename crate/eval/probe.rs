@@ -11,6 +11,7 @@ use rand::SeedableRng;
 use rand_pcg::Pcg64;
 use serde::Serialize;
 
+use super::standardizer::Standardizer;
 use super::{mean_ci95, MeanCi};
 use crate::augment::{planar, Batch};
 use crate::data::{Normalization, Sequence, JOINTS};
@@ -133,8 +134,9 @@ impl Head {
 }
 
 /// Fits a head that regresses the time from `train` encodings (features standardised with the
-/// training statistics) and returns its mean squared error on `test`. `modality` picks the
-/// image or the joint encodings. Deterministic for a seed.
+/// training statistics, robustly: see [`super::REL_STD_FLOOR`] and [`super::STANDARD_CLIP`])
+/// and returns its mean squared error on `test`. `image` picks the image or the joint
+/// encodings. Deterministic for a seed; NaN when either set is empty or the widths differ.
 pub fn fit_head(
     train: &Encodings,
     test: &Encodings,
@@ -151,20 +153,21 @@ pub fn fit_head(
     };
     let h = train.hidden;
     let (mut x_train, mut x_test) = (pick(train), pick(test));
-    // Standardise: the encoders' scales differ by orders of magnitude between models.
-    let n = train.times.len().max(1);
-    for j in 0..h {
-        let col = x_train.iter().skip(j).step_by(h);
-        let mean = col.clone().sum::<f32>() / n as f32;
-        let var = col.map(|v| (v - mean).powi(2)).sum::<f32>() / n as f32;
-        let std = if var > 1e-12 { var.sqrt() } else { 1.0 };
-        for x in [&mut x_train, &mut x_test] {
-            x.iter_mut()
-                .skip(j)
-                .step_by(h)
-                .for_each(|v| *v = (*v - mean) / std);
-        }
+    let (n, k) = (train.times.len(), test.times.len());
+    if h == 0
+        || n == 0
+        || k == 0
+        || test.hidden != h
+        || x_train.len() != n * h
+        || x_test.len() != k * h
+        || config.hidden == 0
+    {
+        return f64::NAN;
     }
+    // Standardise: the encoders' scales differ by orders of magnitude between models.
+    let standardizer = Standardizer::fit(&x_train, h);
+    standardizer.apply(&mut x_train, false);
+    standardizer.apply(&mut x_test, true);
     let device = Device::flex().autodiff();
     device.seed(seed);
     let mut head = Head {
@@ -173,7 +176,7 @@ pub fn fit_head(
     };
     let mut optim = AdamConfig::new().init();
     let mut rng = Pcg64::seed_from_u64(seed);
-    let batch = config.batch.min(train.times.len());
+    let batch = config.batch.clamp(1, n);
     for _ in 0..config.steps {
         let rows = index::sample(&mut rng, train.times.len(), batch).into_vec();
         let x: Vec<f32> = rows
@@ -189,7 +192,6 @@ pub fn fit_head(
     }
     let head = head.valid();
     let plain = Device::flex();
-    let k = test.times.len();
     let x = Tensor::<2>::from_data(TensorData::new(x_test, [k, h]), &plain);
     let t = Tensor::<2>::from_data(TensorData::new(test.times.clone(), [k, 1]), &plain);
     read((head.forward(x) - t).square().mean())
@@ -237,6 +239,78 @@ pub struct ProbeConfig {
     pub head: HeadConfig,
 }
 
+/// A head counts as diverged when its test MSE is above this many times Var(t) of the test
+/// steps (what predicting the mean time scores), or is not finite.
+pub const DIVERGENCE_FACTOR: f64 = 2.0;
+/// Fewer test ids than this make the probe's numbers anecdotal: a warning.
+pub const MIN_TEST_IDS: usize = 3;
+/// Fewer test steps than this: a warning.
+pub const MIN_TEST_STEPS: usize = 100;
+/// Fewer training ids than this: a warning (the heads can memorise them).
+pub const MIN_TRAIN_IDS: usize = 5;
+
+/// True when a head of test MSE `mse` has diverged (or overfit): not finite, or above
+/// [`DIVERGENCE_FACTOR`] × `var_t`, `var_t` being the variance of the test times.
+pub fn diverged(mse: f64, var_t: f64) -> bool {
+    !mse.is_finite() || mse > DIVERGENCE_FACTOR * var_t
+}
+
+/// Population variance of `times` (NaN for none).
+pub fn time_variance(times: &[f32]) -> f64 {
+    if times.is_empty() {
+        return f64::NAN;
+    }
+    let n = times.len() as f64;
+    let mean = times.iter().map(|&t| t as f64).sum::<f64>() / n;
+    times
+        .iter()
+        .map(|&t| (t as f64 - mean).powi(2))
+        .sum::<f64>()
+        / n
+}
+
+/// The warnings a split of `train_ids` ids (`train_steps` steps) and `test_ids` ids
+/// (`test_steps` steps) deserves: too few test ids ([`MIN_TEST_IDS`]), test steps
+/// ([`MIN_TEST_STEPS`]) or training ids ([`MIN_TRAIN_IDS`]). Empty when it is big enough.
+pub fn split_warnings(
+    train_ids: usize,
+    train_steps: usize,
+    test_ids: usize,
+    test_steps: usize,
+) -> Vec<String> {
+    let mut out = Vec::new();
+    let advice = "use more ids (--test-fraction, --test-ids or --test-data)";
+    if test_ids < MIN_TEST_IDS {
+        out.push(format!(
+            "only {test_ids} test id(s) (fewer than {MIN_TEST_IDS}): the MSEs describe those \
+             sequences rather than the encoders, and the CIs cover only the seeds; {advice}"
+        ));
+    }
+    if test_steps < MIN_TEST_STEPS {
+        out.push(format!(
+            "only {test_steps} test steps (fewer than {MIN_TEST_STEPS}): the MSEs are noisy; \
+             {advice}"
+        ));
+    }
+    if train_ids < MIN_TRAIN_IDS {
+        out.push(format!(
+            "only {train_ids} training id(s) ({train_steps} steps; fewer than {MIN_TRAIN_IDS} \
+             ids): the heads can memorise them and fail on the test ids; {advice}"
+        ));
+    }
+    out
+}
+
+/// A head that diverged (see [`diverged`]).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Divergence {
+    /// `"image"` or `"joint"`.
+    pub modality: &'static str,
+    pub seed: u64,
+    /// Its test MSE.
+    pub mse: f64,
+}
+
 /// One row of the table: test MSE of the time regression per seed, and its mean with CI.
 #[derive(Debug, Clone, Serialize)]
 pub struct ProbeResult {
@@ -245,27 +319,56 @@ pub struct ProbeResult {
     pub joint: MeanCi,
     pub image_mse: Vec<f64>,
     pub joint_mse: Vec<f64>,
+    /// The heads that diverged: their cells are not to be trusted.
+    pub diverged: Vec<Divergence>,
+}
+
+impl ProbeResult {
+    /// The seeds whose `modality` (`"image"` / `"joint"`) head diverged.
+    pub fn diverged_seeds(&self, modality: &str) -> Vec<u64> {
+        self.diverged
+            .iter()
+            .filter(|d| d.modality == modality)
+            .map(|d| d.seed)
+            .collect()
+    }
 }
 
 /// Everything the probe measured.
 #[derive(Debug, Clone, Serialize)]
 pub struct ProbeReport {
     pub rows: Vec<ProbeResult>,
+    pub train_sequences: usize,
+    pub test_sequences: usize,
     pub train_steps: usize,
     pub test_steps: usize,
+    /// Variance of the test steps' times: the MSE of predicting their mean time.
+    pub test_time_variance: f64,
+    /// MSE above which a head counts as diverged ([`DIVERGENCE_FACTOR`] × the variance).
+    pub divergence_limit: f64,
     pub seeds: u64,
     pub seconds: f64,
+    /// Everything that makes numbers of this run doubtful: diverged heads (from [`probe`]),
+    /// a split too small ([`split_warnings`], added by the caller that knows the ids).
+    pub warnings: Vec<String>,
+}
+
+/// MSE ×1e-3 with two decimals.
+fn milli(v: f64) -> String {
+    format!("{:.2}", v * 1e3)
 }
 
 impl ProbeReport {
-    /// The table in the paper's layout: MSE ×1e-3, mean (95% CI low, high).
+    /// The table in the paper's layout: MSE ×1e-3, mean (95% CI low, high); cells with a
+    /// diverged head marked ⚠; then Var(t) of the test steps and the warnings.
     pub fn markdown(&self) -> String {
-        let cell = |m: &MeanCi| {
+        let cell = |m: &MeanCi, flagged: bool| {
             format!(
-                "{:.2} ({:.2}, {:.2})",
-                m.mean * 1e3,
-                (m.mean - m.ci95) * 1e3,
-                (m.mean + m.ci95) * 1e3
+                "{} ({}, {}){}",
+                milli(m.mean),
+                milli(m.mean - m.ci95),
+                milli(m.mean + m.ci95),
+                if flagged { " ⚠" } else { "" }
             )
         };
         let mut out = String::from(
@@ -275,18 +378,74 @@ impl ProbeReport {
             out.push_str(&format!(
                 "| {} | {} | {} |\n",
                 r.row.name(),
-                cell(&r.image),
-                cell(&r.joint)
+                cell(&r.image, !r.diverged_seeds("image").is_empty()),
+                cell(&r.joint, !r.diverged_seeds("joint").is_empty())
             ));
+        }
+        out.push_str(&format!(
+            "\nVar(t) of the {} test steps: {} ×1e-3 (the MSE of predicting the mean time); a \
+             head above {} ×1e-3 ({DIVERGENCE_FACTOR}×Var(t)) counts as diverged (⚠).\n",
+            self.test_steps,
+            milli(self.test_time_variance),
+            milli(self.divergence_limit)
+        ));
+        if !self.warnings.is_empty() {
+            out.push_str("\nWarnings:\n\n");
+            for w in &self.warnings {
+                out.push_str(&format!("- {w}\n"));
+            }
         }
         out
     }
 }
 
+/// The warning for the diverged heads of `r`'s `modality`, if any.
+fn divergence_warning(
+    r: &ProbeResult,
+    modality: &'static str,
+    seeds: u64,
+    var_t: f64,
+) -> Option<String> {
+    let bad: Vec<&Divergence> = r
+        .diverged
+        .iter()
+        .filter(|d| d.modality == modality)
+        .collect();
+    if bad.is_empty() {
+        return None;
+    }
+    let worst =
+        bad.iter().map(|d| d.mse).fold(
+            f64::NEG_INFINITY,
+            |a, b| if b.is_nan() || b > a { b } else { a },
+        );
+    let cell = if modality == "image" {
+        r.image
+    } else {
+        r.joint
+    };
+    Some(format!(
+        "{} {modality}: {} of {seeds} heads diverged (seeds {:?}; test MSE up to {} ×1e-3, \
+         cell mean {} ±{} ×1e-3) — above {DIVERGENCE_FACTOR}×Var(t) = {} ×1e-3, where \
+         predicting the mean time scores Var(t) = {} ×1e-3; the heads overfit the training \
+         encodings or extrapolated, so this cell says nothing about the encoder",
+        r.row.name(),
+        bad.len(),
+        bad.iter().map(|d| d.seed).collect::<Vec<_>>(),
+        milli(worst),
+        milli(cell.mean),
+        milli(cell.ci95),
+        milli(DIVERGENCE_FACTOR * var_t),
+        milli(var_t),
+    ))
+}
+
 /// The time-regression probe: for each row and each modality encoder, freeze the encoder, fit
 /// a head regressing the context time from its encodings of `train` steps, and measure the MSE
 /// on `test` steps, over `config.seeds` seeds. `dmbn` must be a DMBN, `pte` a DMBN-PTE, both
-/// for the same frame size. `progress` hears what is being done.
+/// for the same frame size. Heads that diverge ([`diverged`]) are listed in their row and in
+/// the report's warnings; whether the split is big enough is the caller's to check
+/// ([`split_warnings`]: only it knows the ids). `progress` hears what is being done.
 pub fn probe(
     dmbn: &Predictor,
     pte: &Predictor,
@@ -303,11 +462,30 @@ pub fn probe(
             });
         }
     }
+    let train_steps: usize = train.iter().map(Sequence::len).sum();
+    let test_steps: usize = test.iter().map(Sequence::len).sum();
+    for (field, steps) in [
+        ("probe training set", train_steps),
+        ("probe test set", test_steps),
+    ] {
+        if steps == 0 {
+            return Err(ModelError::Config {
+                field,
+                reason: "holds no steps: the probe fits heads on the training steps and \
+                         scores them on the test steps"
+                    .into(),
+            });
+        }
+    }
+    let test_times: Vec<f32> = test.iter().flat_map(Sequence::times).collect();
+    let var_t = time_variance(&test_times);
     let start = Instant::now();
     let size = dmbn.model().image_size();
     let mut rows = Vec::new();
+    let mut warnings = Vec::new();
     for row in ProbeRow::ALL {
         let (mut image_mse, mut joint_mse) = (Vec::new(), Vec::new());
+        let mut bad = Vec::new();
         let fixed = match row {
             ProbeRow::Null => Some((dmbn, true)),
             ProbeRow::Dmbn => Some((dmbn, false)),
@@ -347,22 +525,59 @@ pub fn probe(
                 }
             };
             progress(&format!("{}: fitting heads, seed {seed}", row.name()));
-            image_mse.push(fit_head(&tr, &te, true, &config.head, seed));
-            joint_mse.push(fit_head(&tr, &te, false, &config.head, seed));
+            for (image, modality, mses) in [
+                (true, "image", &mut image_mse),
+                (false, "joint", &mut joint_mse),
+            ] {
+                let mse = fit_head(&tr, &te, image, &config.head, seed);
+                if diverged(mse, var_t) {
+                    bad.push(Divergence {
+                        modality,
+                        seed,
+                        mse,
+                    });
+                }
+                mses.push(mse);
+            }
         }
-        rows.push(ProbeResult {
+        let result = ProbeResult {
             row,
             image: mean_ci95(&image_mse),
             joint: mean_ci95(&joint_mse),
             image_mse,
             joint_mse,
-        });
+            diverged: bad,
+        };
+        for modality in ["image", "joint"] {
+            if let Some(w) = divergence_warning(&result, modality, config.seeds, var_t) {
+                warnings.push(w);
+            }
+        }
+        rows.push(result);
     }
     Ok(ProbeReport {
         rows,
-        train_steps: train.iter().map(Sequence::len).sum(),
-        test_steps: test.iter().map(Sequence::len).sum(),
+        train_sequences: train.len(),
+        test_sequences: test.len(),
+        train_steps,
+        test_steps,
+        test_time_variance: var_t,
+        divergence_limit: DIVERGENCE_FACTOR * var_t,
         seeds: config.seeds,
         seconds: start.elapsed().as_secs_f64(),
+        warnings,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn divergence_and_split_thresholds() {
+        assert!(diverged(0.2, 0.08) && diverged(f64::NAN, 0.08) && !diverged(0.1, 0.08));
+        assert!((time_variance(&[0.0, 1.0]) - 0.25).abs() < 1e-12);
+        assert!(split_warnings(5, 500, 3, 100).is_empty());
+        assert_eq!(split_warnings(4, 500, 2, 99).len(), 3);
+    }
 }

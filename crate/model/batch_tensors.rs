@@ -1,7 +1,7 @@
 use burn::tensor::{Device, Tensor, TensorData};
 
 use super::ModelError;
-use crate::augment::Batch;
+use crate::augment::{Batch, JointTargets};
 
 /// A [`Batch`] as tensors on one device, checked: every length matches the stated sizes,
 /// every value is finite, the mask holds only 0 and 1, every sequence has a context and every
@@ -142,6 +142,35 @@ pub fn tensors(batch: &Batch, device: &Device) -> Result<BatchTensors, ModelErro
         target_joints: has_target_joints.then(|| tensor(&batch.target_joints, [b, m, 7], device)),
         blend: tensor(&batch.blend, [b], device),
     })
+}
+
+/// Checks joint-only targets and turns them into `[B, M_j]` times and `[B, M_j, 7]` joints.
+pub fn joint_target_tensors(
+    targets: &JointTargets,
+    device: &Device,
+) -> Result<(Tensor<2>, Tensor<3>), ModelError> {
+    let (b, m) = (targets.batch, targets.targets);
+    if b == 0 || m == 0 {
+        return Err(ModelError::EmptyDimension {
+            field: "joint_targets",
+        });
+    }
+    check(
+        "joint_target_times",
+        &targets.times,
+        b * m,
+        &format!("[B={b}, M={m}]"),
+    )?;
+    check(
+        "joint_target_joints",
+        &targets.joints,
+        b * m * 7,
+        &format!("[B={b}, M={m}, 7]"),
+    )?;
+    Ok((
+        tensor(&targets.times, [b, m], device),
+        tensor(&targets.joints, [b, m, 7], device),
+    ))
 }
 
 /// A checked field as a tensor of `shape`.

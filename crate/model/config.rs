@@ -6,7 +6,7 @@ use super::ModelError;
 /// Frame sizes the architecture is defined for.
 pub const IMAGE_SIZES: [usize; 2] = [64, 128];
 
-/// Which of the paper's two networks.
+/// Which network: the paper's two, or the attentive model.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum ModelKind {
@@ -16,17 +16,21 @@ pub enum ModelKind {
     /// DMBN-PTE, "time as context" (positional time encoding): a shared projection P(t) is
     /// added to every context encoding and subtracted from the representation per target.
     Pte,
+    /// The attentive model: DMBN-PTE's context encodings aggregated per target by
+    /// cross-attention over the context times instead of a mean.
+    Attn,
 }
 
 impl ModelKind {
-    /// Both kinds.
-    pub const ALL: [ModelKind; 2] = [ModelKind::Dmbn, ModelKind::Pte];
+    /// Every kind.
+    pub const ALL: [ModelKind; 3] = [ModelKind::Dmbn, ModelKind::Pte, ModelKind::Attn];
 
-    /// The name used in model files and on the command line: `dmbn` or `pte`.
+    /// The name used in model files and on the command line: `dmbn`, `pte` or `attn`.
     pub fn name(self) -> &'static str {
         match self {
             ModelKind::Dmbn => "dmbn",
             ModelKind::Pte => "pte",
+            ModelKind::Attn => "attn",
         }
     }
 }
@@ -44,9 +48,10 @@ impl std::str::FromStr for ModelKind {
         match s {
             "dmbn" => Ok(ModelKind::Dmbn),
             "pte" | "dmbn-pte" => Ok(ModelKind::Pte),
+            "attn" => Ok(ModelKind::Attn),
             _ => Err(ModelError::config(
                 "kind",
-                format!("is {s:?}: expected \"dmbn\" or \"pte\""),
+                format!("is {s:?}: expected \"dmbn\", \"pte\" or \"attn\""),
             )),
         }
     }
@@ -55,7 +60,7 @@ impl std::str::FromStr for ModelKind {
 /// Everything that defines a model besides its weights; saved in the model file's header.
 #[derive(Config, Debug, PartialEq)]
 pub struct ModelConfig {
-    /// Which network: DMBN or DMBN-PTE.
+    /// Which network: DMBN, DMBN-PTE or the attentive model.
     pub kind: ModelKind,
     /// Frame width and height: 64 or 128.
     #[config(default = 64)]
@@ -69,6 +74,9 @@ pub struct ModelConfig {
     /// Weight of the joint NLL in the total loss (the image NLL has weight 1).
     #[config(default = 0.01)]
     pub joint_weight: f64,
+    /// Attention heads of the attentive model (a divisor of `hidden`); unused by the others.
+    /// Absent from files written before the attentive model: those hold no such model.
+    pub heads: Option<usize>,
 }
 
 impl ModelConfig {
@@ -78,6 +86,15 @@ impl ModelConfig {
         encoder_filters(self.image_size)?;
         if self.hidden == 0 {
             return Err(ModelError::config("hidden", "is 0: expected at least 1"));
+        }
+        if self.kind == ModelKind::Attn {
+            let heads = self.attention_heads();
+            if heads == 0 || self.hidden % heads != 0 {
+                return Err(ModelError::config(
+                    "heads",
+                    format!("is {heads}: expected a divisor of hidden ({})", self.hidden),
+                ));
+            }
         }
         if !(0.0..1.0).contains(&self.sigma_floor) {
             return Err(ModelError::config(
@@ -92,6 +109,13 @@ impl ModelConfig {
             ));
         }
         Ok(())
+    }
+}
+
+impl ModelConfig {
+    /// Heads of the attentive model's attention: `heads`, 8 by default.
+    pub fn attention_heads(&self) -> usize {
+        self.heads.unwrap_or(8)
     }
 }
 
@@ -163,6 +187,12 @@ mod tests {
             .is_err());
         assert!("pte".parse::<ModelKind>().is_ok());
         assert!("cnp".parse::<ModelKind>().is_err());
+        assert_eq!("attn".parse::<ModelKind>().unwrap(), ModelKind::Attn);
+        assert!(ModelConfig::new(ModelKind::Attn)
+            .with_heads(Some(3))
+            .validate()
+            .is_err());
+        assert!(ModelConfig::new(ModelKind::Attn).validate().is_ok());
     }
 
     #[test]

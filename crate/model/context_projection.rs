@@ -1,6 +1,6 @@
 use burn::config::Config;
 use burn::module::Module;
-use burn::nn::{LayerNorm, LayerNormConfig, Linear, LinearConfig};
+use burn::nn::{LayerNorm, LayerNormConfig, Linear};
 use burn::tensor::{Device, Tensor};
 
 /// Configuration of a [`ContextProjection`].
@@ -29,7 +29,7 @@ impl ContextProjectionConfig {
     /// Builds the projection.
     pub fn init(&self, device: &Device) -> ContextProjection {
         ContextProjection {
-            linear: LinearConfig::new(self.hidden, self.hidden).init(device),
+            linear: super::init::dense(self.hidden, self.hidden, device),
             norm: LayerNormConfig::new(self.hidden).init(device),
         }
     }

@@ -1,6 +1,6 @@
 use burn::config::Config;
 use burn::module::Module;
-use burn::nn::{Linear, LinearConfig};
+use burn::nn::Linear;
 use burn::tensor::activation::relu;
 use burn::tensor::{Device, Tensor};
 
@@ -39,7 +39,7 @@ impl DecoderConfig {
     /// Builds the decoder.
     pub fn init(&self, device: &Device) -> Decoder {
         Decoder {
-            shared: LinearConfig::new(self.input, self.shared).init(device),
+            shared: super::init::dense(self.input, self.shared, device),
             image: ImageDecoderConfig::new(self.image_filters.clone())
                 .with_input(self.shared)
                 .with_sigma_floor(self.sigma_floor)
@@ -55,8 +55,8 @@ impl DecoderConfig {
 impl Decoder {
     /// `[B, M, input]` conditioned representations to the prediction for every target.
     pub fn forward(&self, x: Tensor<3>) -> Prediction {
-        let [b, m, input] = x.dims();
-        let x = relu(self.shared.forward(x.reshape([b * m, input])));
+        let [b, m, _] = x.dims();
+        let x = self.shared_layer(x);
         let (image_mean, image_sigma) = self.image.forward(x.clone());
         let (joint_mean, joint_sigma) = self.joint.forward(x);
         let [_, c, h, w] = image_mean.dims();
@@ -66,5 +66,18 @@ impl Decoder {
             joint_mean: joint_mean.reshape([b, m, 7]),
             joint_sigma: joint_sigma.reshape([b, m, 7]),
         }
+    }
+
+    /// Only the joints: `[B, M, input]` to their mean and σ, `[B, M, 7]` each.
+    pub fn joints(&self, x: Tensor<3>) -> (Tensor<3>, Tensor<3>) {
+        let [b, m, _] = x.dims();
+        let (mean, sigma) = self.joint.forward(self.shared_layer(x));
+        (mean.reshape([b, m, 7]), sigma.reshape([b, m, 7]))
+    }
+
+    /// The shared Dense + ReLU, `[B, M, input]` to `[B·M, shared]`.
+    fn shared_layer(&self, x: Tensor<3>) -> Tensor<2> {
+        let [b, m, input] = x.dims();
+        relu(self.shared.forward(x.reshape([b * m, input])))
     }
 }

@@ -6,7 +6,8 @@ use super::config::{decoder_filters, encoder_filters};
 use super::decoder::{Decoder, DecoderConfig};
 use super::image_encoder::{ImageEncoder, ImageEncoderConfig};
 use super::joint_encoder::{JointEncoder, JointEncoderConfig};
-use super::{BatchTensors, ContextEncodings, ModelError, Prediction, Representation};
+use super::prediction::per_target;
+use super::{BatchTensors, ContextEncodings, ModelError, Prediction};
 
 /// Configuration of a [`Dmbn`].
 #[derive(Config, Debug)]
@@ -79,19 +80,19 @@ impl Dmbn {
     }
 
     /// The blended representation r, `[B, H]`.
-    pub fn encode(&self, batch: &BatchTensors) -> Representation {
+    pub fn encode(&self, batch: &BatchTensors) -> Tensor<2> {
         self.encode_contexts(batch).represent(batch)
     }
 
-    /// The prediction at `[B, M]` target times, from `[B, H]` representations.
-    pub fn decode(&self, representation: &Representation, target_times: Tensor<2>) -> Prediction {
-        let r = representation.per_target(target_times.dims()[1]);
-        let x = Tensor::cat(vec![r, target_times.unsqueeze_dim::<3>(2)], 2);
-        self.decoder.forward(x)
+    /// The decoder input at `[B, M]` target times, `[B, M, H + 1]`: `[r, t_target]`.
+    pub fn condition(&self, r: &Tensor<2>, target_times: Tensor<2>) -> Tensor<3> {
+        let r = per_target(r, target_times.dims()[1]);
+        Tensor::cat(vec![r, target_times.unsqueeze_dim::<3>(2)], 2)
     }
 
     /// Encode the contexts and decode the batch's target times.
     pub fn forward(&self, batch: &BatchTensors) -> Prediction {
-        self.decode(&self.encode(batch), batch.target_times.clone())
+        let x = self.condition(&self.encode(batch), batch.target_times.clone());
+        self.decoder.forward(x)
     }
 }

@@ -7,8 +7,9 @@ use super::context_projection::{ContextProjection, ContextProjectionConfig};
 use super::decoder::{Decoder, DecoderConfig};
 use super::image_encoder::{ImageEncoder, ImageEncoderConfig};
 use super::joint_encoder::{JointEncoder, JointEncoderConfig};
+use super::prediction::per_target;
 use super::time_projection::{TimeProjection, TimeProjectionConfig};
-use super::{BatchTensors, ContextEncodings, ModelError, Prediction, Representation};
+use super::{BatchTensors, ContextEncodings, ModelError, Prediction};
 
 /// Configuration of a [`DmbnPte`].
 #[derive(Config, Debug)]
@@ -73,33 +74,49 @@ impl DmbnPteConfig {
 impl DmbnPte {
     /// Every context slot's z per modality, `[B, N, H]` each (padding included).
     pub fn encode_contexts(&self, batch: &BatchTensors) -> ContextEncodings {
-        let [b, n, c, s, _] = batch.context_images.dims();
-        let images = batch.context_images.clone().reshape([b * n, c, s, s]);
-        let image = self.image_encoder.forward(images);
-        let [_, h] = image.dims();
-        let time = self.time.forward(batch.context_times.clone());
-        let joint = self.joint_encoder.forward(batch.context_joints.clone());
-        ContextEncodings {
-            image: self
-                .image_projection
-                .forward(image.reshape([b, n, h]) + time.clone()),
-            joint: self.joint_projection.forward(joint + time),
-        }
+        pte_context_encodings(
+            &self.image_encoder,
+            &self.joint_encoder,
+            &self.time,
+            [&self.image_projection, &self.joint_projection],
+            batch,
+        )
     }
 
     /// The blended representation r, `[B, H]`, before any target time is subtracted.
-    pub fn encode(&self, batch: &BatchTensors) -> Representation {
+    pub fn encode(&self, batch: &BatchTensors) -> Tensor<2> {
         self.encode_contexts(batch).represent(batch)
     }
 
-    /// The prediction at `[B, M]` target times: r_target = r − P(t_target).
-    pub fn decode(&self, representation: &Representation, target_times: Tensor<2>) -> Prediction {
-        let r = representation.per_target(target_times.dims()[1]);
-        self.decoder.forward(r - self.time.forward(target_times))
+    /// The decoder input at `[B, M]` target times, `[B, M, H]`: r_target = r − P(t_target).
+    pub fn condition(&self, r: &Tensor<2>, target_times: Tensor<2>) -> Tensor<3> {
+        per_target(r, target_times.dims()[1]) - self.time.forward(target_times)
     }
 
     /// Encode the contexts and decode the batch's target times.
     pub fn forward(&self, batch: &BatchTensors) -> Prediction {
-        self.decode(&self.encode(batch), batch.target_times.clone())
+        let x = self.condition(&self.encode(batch), batch.target_times.clone());
+        self.decoder.forward(x)
+    }
+}
+
+/// Every context slot's z_m = g_m(e_m(x) + P(t)) per modality, `[B, N, H]` each: the context
+/// encoding of DMBN-PTE and of the attentive model, which aggregate it differently.
+pub(super) fn pte_context_encodings(
+    image_encoder: &ImageEncoder,
+    joint_encoder: &JointEncoder,
+    time: &TimeProjection,
+    [image_projection, joint_projection]: [&ContextProjection; 2],
+    batch: &BatchTensors,
+) -> ContextEncodings {
+    let [b, n, c, s, _] = batch.context_images.dims();
+    let images = batch.context_images.clone().reshape([b * n, c, s, s]);
+    let image = image_encoder.forward(images);
+    let [_, h] = image.dims();
+    let time = time.forward(batch.context_times.clone());
+    let joint = joint_encoder.forward(batch.context_joints.clone());
+    ContextEncodings {
+        image: image_projection.forward(image.reshape([b, n, h]) + time.clone()),
+        joint: joint_projection.forward(joint + time),
     }
 }

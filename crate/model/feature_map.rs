@@ -11,8 +11,7 @@
 //! `conv_op` (burn autodiff operations), with their gradients here: the same patches and
 //! products, transposed. Tests hold both paths equal to burn's own layers, values and
 //! gradients.
-use burn::nn::conv::{Conv2d, Conv2dConfig};
-use burn::nn::PaddingConfig2d;
+use burn::nn::conv::Conv2d;
 use burn::tensor::{Device, Tensor, TensorData};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
@@ -214,9 +213,7 @@ const UPSAMPLED_TAPS: [[(isize, &[usize]); 2]; 2] =
 /// A 3×3 'same' convolution from `channels[0]` to `channels[1]` channels: the layer both
 /// image networks are built of.
 pub fn new_conv3x3(channels: [usize; 2], device: &Device) -> Conv2d {
-    Conv2dConfig::new(channels, [3, 3])
-        .with_padding(PaddingConfig2d::Same)
-        .init(device)
+    super::init::conv3x3(channels, device)
 }
 
 /// Whether `x` takes part in an autodiff graph (it is trained, or computed from what is):

@@ -1,7 +1,7 @@
 use burn::config::Config;
 use burn::module::Module;
 use burn::nn::conv::Conv2d;
-use burn::nn::{Linear, LinearConfig};
+use burn::nn::Linear;
 use burn::tensor::activation::relu;
 use burn::tensor::{Device, Tensor};
 
@@ -51,7 +51,7 @@ impl ImageEncoderConfig {
             .collect();
         ImageEncoder {
             convs,
-            dense: LinearConfig::new(channels * 4, self.hidden).init(device),
+            dense: super::init::dense(channels * 4, self.hidden, device),
             kernels: KernelCache::default(),
         }
     }

@@ -1,6 +1,6 @@
 use burn::config::Config;
 use burn::module::Module;
-use burn::nn::{Linear, LinearConfig};
+use burn::nn::Linear;
 use burn::tensor::activation::relu;
 use burn::tensor::{Device, Tensor};
 
@@ -41,15 +41,15 @@ impl JointDecoderConfig {
         let layers = JOINT_DECODER_LAYERS
             .iter()
             .map(|&width| {
-                let layer = LinearConfig::new(inputs, width).init(device);
+                let layer = super::init::dense(inputs, width, device);
                 inputs = width;
                 layer
             })
             .collect();
         JointDecoder {
             layers,
-            mean: LinearConfig::new(inputs, 7).init(device),
-            sigma: LinearConfig::new(inputs, 7).init(device),
+            mean: super::init::dense(inputs, 7, device),
+            sigma: super::init::dense(inputs, 7, device),
             sigma_floor: self.sigma_floor,
         }
     }

@@ -1,6 +1,6 @@
 use burn::config::Config;
 use burn::module::Module;
-use burn::nn::{Linear, LinearConfig};
+use burn::nn::Linear;
 use burn::tensor::activation::relu;
 use burn::tensor::{Device, Tensor};
 
@@ -33,7 +33,7 @@ impl JointEncoderConfig {
             .iter()
             .chain([self.hidden].iter())
             .map(|&width| {
-                let layer = LinearConfig::new(inputs, width).init(device);
+                let layer = super::init::dense(inputs, width, device);
                 inputs = width;
                 layer
             })

@@ -83,13 +83,11 @@ pub fn gaussian_loss(
             prediction.image_sigma.clone().square(),
         )
         .mean();
-    let joint_nll = nll
-        .forward_no_reduction(
-            prediction.joint_mean.clone(),
-            target_joints.clone(),
-            prediction.joint_sigma.clone().square(),
-        )
-        .mean();
+    let joint_nll = joint_nll(
+        prediction.joint_mean.clone(),
+        prediction.joint_sigma.clone(),
+        target_joints.clone(),
+    );
     let total = image_nll.clone() + joint_nll.clone().mul_scalar(joint_weight);
     let image_mse = (prediction.image_mean.clone().detach() - target_images)
         .square()
@@ -104,6 +102,15 @@ pub fn gaussian_loss(
         image_mse,
         joint_mse,
     }
+}
+
+/// The Gaussian NLL of `target` joints under `mean` and `sigma` (all `[B, M, 7]`), per value.
+pub fn joint_nll(mean: Tensor<3>, sigma: Tensor<3>, target: Tensor<3>) -> Tensor<1> {
+    GaussianNLLLossConfig::new()
+        .with_full(true)
+        .init()
+        .forward_no_reduction(mean, target, sigma.square())
+        .mean()
 }
 
 #[cfg(test)]

@@ -1,4 +1,4 @@
-//! DMBN and DMBN-PTE in burn, following the paper's Figure 1: context inputs → encoders
+//! DMBN, DMBN-PTE and the attentive model in burn, following the paper's Figure 1: context inputs → encoders
 //! ([`ImageEncoder`], [`JointEncoder`]; for DMBN-PTE plus [`TimeProjection`] and
 //! [`ContextProjection`]) → set average and blending ([`masked_mean`], [`blend`]) → target
 //! time → [`Decoder`] ([`ImageDecoder`], [`JointDecoder`]) → mean and σ ([`Prediction`]),
@@ -17,6 +17,7 @@ mod context_projection;
 mod conv_op;
 mod decoder;
 mod dmbn;
+mod dmbn_attn;
 mod dmbn_pte;
 mod error;
 mod feature_map;
@@ -24,6 +25,7 @@ pub mod file;
 mod gaussian;
 mod image_decoder;
 mod image_encoder;
+mod init;
 mod joint_decoder;
 mod joint_encoder;
 mod loss;
@@ -32,15 +34,17 @@ mod model;
 mod prediction;
 #[cfg(test)]
 mod testing;
+mod time_embedding;
 mod time_projection;
 
 pub use crate::data::Normalization;
 pub use aggregation::{blend, masked_mean};
-pub use batch_tensors::{tensors, BatchTensors};
+pub use batch_tensors::{joint_target_tensors, tensors, BatchTensors};
 pub use config::{decoder_filters, encoder_filters, ModelConfig, ModelKind, IMAGE_SIZES};
 pub use context_projection::{ContextProjection, ContextProjectionConfig};
 pub use decoder::{Decoder, DecoderConfig};
 pub use dmbn::{Dmbn, DmbnConfig};
+pub use dmbn_attn::{DmbnAttn, DmbnAttnConfig};
 pub use dmbn_pte::{DmbnPte, DmbnPteConfig};
 pub use error::ModelError;
 pub use feature_map::{new_conv3x3, Activation, FeatureMap, KernelCache, Kernels};
@@ -52,7 +56,8 @@ pub use image_decoder::{upsample2, ImageDecoder, ImageDecoderConfig};
 pub use image_encoder::{ImageEncoder, ImageEncoderConfig};
 pub use joint_decoder::{JointDecoder, JointDecoderConfig};
 pub use joint_encoder::{JointEncoder, JointEncoderConfig};
-pub use loss::{gaussian_loss, Loss, LossValues};
+pub use loss::{gaussian_loss, joint_nll, Loss, LossValues};
 pub use model::{Model, Network};
-pub use prediction::{ContextEncodings, Prediction, Representation};
+pub use prediction::{AttentiveContexts, ContextEncodings, Prediction, Representation};
+pub use time_embedding::{TimeEmbedding, TimeEmbeddingConfig};
 pub use time_projection::{TimeProjection, TimeProjectionConfig};

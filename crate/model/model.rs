@@ -2,13 +2,15 @@ use burn::module::{Module, ModuleVisitor, Param};
 use burn::tensor::{Device, Tensor};
 
 use super::dmbn::{Dmbn, DmbnConfig};
+use super::dmbn_attn::{DmbnAttn, DmbnAttnConfig};
 use super::dmbn_pte::{DmbnPte, DmbnPteConfig};
 use super::loss::{gaussian_loss, Loss};
 use super::{
-    BatchTensors, ContextEncodings, ModelConfig, ModelError, ModelKind, Prediction, Representation,
+    BatchTensors, ContextEncodings, Decoder, ModelConfig, ModelError, ModelKind, Prediction,
+    Representation,
 };
 
-/// One of the two networks.
+/// One of the three networks.
 // One value per model: the size difference between the variants costs nothing.
 #[allow(clippy::large_enum_variant)]
 #[derive(Module, Debug)]
@@ -17,10 +19,12 @@ pub enum Network {
     Dmbn(Dmbn),
     /// Positional time encoding.
     Pte(DmbnPte),
+    /// Positional time encoding, attentive aggregation.
+    Attn(DmbnAttn),
 }
 
-/// A DMBN or DMBN-PTE with its [`ModelConfig`], so that training, evaluation and inference
-/// are written once for both. Its methods check their inputs against the config and return
+/// A DMBN, DMBN-PTE or attentive model with its [`ModelConfig`], so that training,
+/// evaluation and inference are written once for all. Its methods check their inputs against the config and return
 /// a [`ModelError`] instead of panicking.
 #[derive(Module, Debug)]
 pub struct Model {
@@ -47,6 +51,14 @@ impl ModelConfig {
                 DmbnPteConfig::new()
                     .with_image_size(self.image_size)
                     .with_hidden(self.hidden)
+                    .with_sigma_floor(self.sigma_floor)
+                    .init(device)?,
+            ),
+            ModelKind::Attn => Network::Attn(
+                DmbnAttnConfig::new()
+                    .with_image_size(self.image_size)
+                    .with_hidden(self.hidden)
+                    .with_heads(self.attention_heads())
                     .with_sigma_floor(self.sigma_floor)
                     .init(device)?,
             ),
@@ -82,15 +94,16 @@ impl Model {
     ///
     /// [`KernelCache::freeze`]: super::KernelCache::freeze
     pub fn freeze_kernels(&self) {
-        let (encoder, decoder) = match &self.network {
-            Network::Dmbn(n) => (&n.image_encoder, &n.decoder),
-            Network::Pte(n) => (&n.image_encoder, &n.decoder),
+        let encoder = match &self.network {
+            Network::Dmbn(n) => &n.image_encoder,
+            Network::Pte(n) => &n.image_encoder,
+            Network::Attn(n) => &n.image_encoder,
         };
         encoder.kernels.freeze();
-        decoder.image.kernels.freeze();
+        self.decoder().image.kernels.freeze();
     }
 
-    /// DMBN or DMBN-PTE.
+    /// DMBN, DMBN-PTE or the attentive model.
     pub fn kind(&self) -> ModelKind {
         self.config.kind
     }
@@ -107,16 +120,19 @@ impl Model {
         Ok(match &self.network {
             Network::Dmbn(net) => net.encode_contexts(batch),
             Network::Pte(net) => net.encode_contexts(batch),
+            Network::Attn(net) => net.encode_contexts(batch),
         })
     }
 
-    /// The blended representation of each sequence's contexts, `[B, H]`; decode it at as
-    /// many target times as needed with [`Model::decode`].
+    /// What the decoders are conditioned on (the blended mean representation, or the
+    /// contexts to attend to); decode it at as many target times as needed with
+    /// [`Model::decode`].
     pub fn encode(&self, batch: &BatchTensors) -> Result<Representation, ModelError> {
         self.check(batch)?;
         Ok(match &self.network {
-            Network::Dmbn(net) => net.encode(batch),
-            Network::Pte(net) => net.encode(batch),
+            Network::Dmbn(net) => Representation::Mean(net.encode(batch)),
+            Network::Pte(net) => Representation::Mean(net.encode(batch)),
+            Network::Attn(net) => Representation::Attentive(net.encode(batch)),
         })
     }
 
@@ -126,15 +142,55 @@ impl Model {
         representation: &Representation,
         target_times: Tensor<2>,
     ) -> Result<Prediction, ModelError> {
-        let [batch, _] = representation.r.dims();
+        let x = self.condition(representation, target_times)?;
+        Ok(self.decoder().forward(x))
+    }
+
+    /// Only the joints' mean and σ at `[B, M]` target times, `[B, M, 7]` each: the image
+    /// decoder, most of a target's cost, is skipped (training uses it to supervise the joints
+    /// at many more steps than it decodes frames for).
+    pub fn decode_joints(
+        &self,
+        representation: &Representation,
+        target_times: Tensor<2>,
+    ) -> Result<(Tensor<3>, Tensor<3>), ModelError> {
+        let x = self.condition(representation, target_times)?;
+        Ok(self.decoder().joints(x))
+    }
+
+    /// The decoders' input at `[B, M]` target times.
+    fn condition(
+        &self,
+        representation: &Representation,
+        target_times: Tensor<2>,
+    ) -> Result<Tensor<3>, ModelError> {
+        let batch = representation.batch();
         let found = target_times.dims();
         if found[0] != batch || found[1] == 0 {
             return Err(ModelError::TargetTimes { batch, found });
         }
-        Ok(match &self.network {
-            Network::Dmbn(net) => net.decode(representation, target_times),
-            Network::Pte(net) => net.decode(representation, target_times),
+        Ok(match (&self.network, representation) {
+            (Network::Dmbn(net), Representation::Mean(r)) => net.condition(r, target_times),
+            (Network::Pte(net), Representation::Mean(r)) => net.condition(r, target_times),
+            (Network::Attn(net), Representation::Attentive(c)) => net.condition(c, target_times),
+            _ => {
+                return Err(ModelError::config(
+                    "representation",
+                    format!(
+                        "was not made by this {} model: encode with the model that decodes",
+                        self.kind()
+                    ),
+                ))
+            }
         })
+    }
+
+    fn decoder(&self) -> &Decoder {
+        match &self.network {
+            Network::Dmbn(n) => &n.decoder,
+            Network::Pte(n) => &n.decoder,
+            Network::Attn(n) => &n.decoder,
+        }
     }
 
     /// Encode the batch's contexts and decode its target times (training).

@@ -1,22 +1,50 @@
-use burn::tensor::Tensor;
+use burn::tensor::{Bool, Tensor};
 
 use super::{blend, masked_mean, BatchTensors};
 
-/// The blended set representation r of each sequence's contexts: what the decoders are
-/// conditioned on. For DMBN-PTE it is r before any target time is subtracted, so one
-/// representation serves every target time. Encode once, decode many.
+/// What the decoders are conditioned on, computed once per context set so that any number of
+/// target times can be decoded from it. Encode once, decode many.
 #[derive(Debug, Clone)]
-pub struct Representation {
-    /// `[B, H]`: r = c·r_image + (1 − c)·r_joint.
-    pub r: Tensor<2>,
+// One value per encoded context set: the size difference between the variants costs nothing.
+#[allow(clippy::large_enum_variant)]
+pub enum Representation {
+    /// DMBN and DMBN-PTE: `[B, H]`, the blended mean r = c·r_image + (1 − c)·r_joint (for
+    /// DMBN-PTE before any target time is subtracted).
+    Mean(Tensor<2>),
+    /// The attentive model: the contexts each target attends to.
+    Attentive(AttentiveContexts),
 }
 
 impl Representation {
-    /// r repeated for each of `m` targets, `[B, m, H]`.
-    pub fn per_target(&self, m: usize) -> Tensor<3> {
-        let [b, h] = self.r.dims();
-        self.r.clone().unsqueeze_dim::<3>(1).expand([b, m, h])
+    /// B: sequences.
+    pub fn batch(&self) -> usize {
+        match self {
+            Representation::Mean(r) => r.dims()[0],
+            Representation::Attentive(contexts) => contexts.blend.dims()[0],
+        }
     }
+}
+
+/// r repeated for each of `m` targets, `[B, m, H]`.
+pub fn per_target(r: &Tensor<2>, m: usize) -> Tensor<3> {
+    let [b, h] = r.dims();
+    r.clone().unsqueeze_dim::<3>(1).expand([b, m, h])
+}
+
+/// The attentive model's context set: per-context encodings of both modalities, the keys
+/// (embedded context times), which slots are padding, and the blending coefficients.
+#[derive(Debug, Clone)]
+pub struct AttentiveContexts {
+    /// `[B, N, H]`: image context encodings z_image.
+    pub image: Tensor<3>,
+    /// `[B, N, H]`: joint context encodings z_joint.
+    pub joint: Tensor<3>,
+    /// `[B, N, H]`: the embedded context times.
+    pub keys: Tensor<3>,
+    /// `[B, N]`: true for a padding slot.
+    pub padding: Tensor<2, Bool>,
+    /// `[B]`: blending coefficient c of each sequence.
+    pub blend: Tensor<1>,
 }
 
 /// The per-context encodings before the set average, per modality: what the paper's
@@ -33,12 +61,10 @@ pub struct ContextEncodings {
 impl ContextEncodings {
     /// The set representation of both networks: the masked mean over contexts per modality,
     /// blended with each sequence's coefficient, r = c·r_image + (1 − c)·r_joint.
-    pub fn represent(self, batch: &BatchTensors) -> Representation {
+    pub fn represent(self, batch: &BatchTensors) -> Tensor<2> {
         let r_image = masked_mean(self.image, batch.context_mask.clone());
         let r_joint = masked_mean(self.joint, batch.context_mask.clone());
-        Representation {
-            r: blend(r_image, r_joint, batch.blend.clone()),
-        }
+        blend(r_image, r_joint, batch.blend.clone())
     }
 }
 

@@ -35,7 +35,7 @@ impl Schedule {
 /// continues the same run.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct TrainConfig {
-    /// DMBN or DMBN-PTE.
+    /// DMBN, DMBN-PTE or the attentive model.
     pub model: ModelKind,
     /// Frame size the model works at (frames are resized to it when read).
     pub image_size: usize,
@@ -49,6 +49,14 @@ pub struct TrainConfig {
     pub max_contexts: usize,
     /// Targets per sequence.
     pub targets_per_sequence: usize,
+    /// Targets ⊇ contexts: each sequence's contexts lead its targets (the reference CNP's
+    /// training); otherwise targets are other steps.
+    #[serde(default)]
+    pub contexts_in_targets: bool,
+    /// Joint-only targets per sequence on top of the full ones (joints supervised at more
+    /// steps than frames are decoded for); their NLL is added with the joint weight.
+    #[serde(default)]
+    pub joint_targets: usize,
     /// Base learning rate (Adam).
     pub lr: f64,
     /// Learning-rate schedule.
@@ -83,6 +91,8 @@ impl TrainConfig {
             batch: 8,
             max_contexts: 5,
             targets_per_sequence: 4,
+            contexts_in_targets: false,
+            joint_targets: 0,
             lr: 1e-4,
             schedule: Schedule::Constant,
             clip_norm: 1.0,

@@ -26,6 +26,14 @@ pub struct Metrics {
     pub val_image_mse: Option<f32>,
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub val_joint_mse: Option<f32>,
+    /// Validation on reconstructing the contexts themselves (targets = contexts): the loss,
+    /// image and joint MSE. A CNP that underfits its contexts shows it here first.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub val_context_loss: Option<f32>,
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub val_context_image_mse: Option<f32>,
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub val_context_joint_mse: Option<f32>,
     /// Optimiser steps per second over the last logging interval.
     pub steps_per_s: f64,
 }

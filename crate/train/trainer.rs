@@ -8,7 +8,9 @@ use rand::SeedableRng;
 use rand_pcg::Pcg64;
 
 use crate::augment::{Batch, Sampler, SamplerConfig};
-use crate::model::{self, tensors, LossValues, Model, ModelConfig, Normalization};
+use crate::model::{
+    self, joint_nll, joint_target_tensors, tensors, LossValues, Model, ModelConfig, Normalization,
+};
 
 use super::{Checkpoint, CheckpointState, Metrics, MetricsLog, Split, TrainConfig, TrainError};
 
@@ -130,11 +132,14 @@ impl Trainer {
             batch: config.batch,
             max_contexts: config.max_contexts,
             targets: config.targets_per_sequence,
+            contexts_in_targets: config.contexts_in_targets,
+            joint_targets: 0,
             warp: None,
         };
         // Training batches are warped with --augment; validation always sees plain sequences.
         let sampler = Sampler::new(SamplerConfig {
             warp: config.augment,
+            joint_targets: config.joint_targets,
             ..plain
         });
         let pool = if split.val.is_empty() {
@@ -180,12 +185,21 @@ impl Trainer {
 
     /// One optimiser step on a fresh batch; a non-finite loss stops before touching the weights.
     pub fn step(&mut self) -> Result<(LossValues, f64), TrainError> {
-        let batch = self
-            .sampler
-            .sample(&self.split.train, &self.normalization, &mut self.rng);
+        let (batch, joint_targets) =
+            self.sampler
+                .sample_with_joints(&self.split.train, &self.normalization, &mut self.rng);
         let batch = tensors(&batch, &self.device)?;
-        let prediction = self.model.forward(&batch)?;
-        let loss = self.model.loss(&prediction, &batch)?;
+        let representation = self.model.encode(&batch)?;
+        let prediction = self
+            .model
+            .decode(&representation, batch.target_times.clone())?;
+        let mut loss = self.model.loss(&prediction, &batch)?;
+        if joint_targets.targets > 0 {
+            let (times, joints) = joint_target_tensors(&joint_targets, &self.device)?;
+            let (mean, sigma) = self.model.decode_joints(&representation, times)?;
+            let nll = joint_nll(mean, sigma, joints);
+            loss.total = loss.total + nll.mul_scalar(self.config.joint_weight);
+        }
         let values = loss.values();
         if !values.total.is_finite() {
             return Err(TrainError::NonFinite {
@@ -203,8 +217,18 @@ impl Trainer {
         Ok((values, lr))
     }
 
-    /// Mean losses over the fixed validation batches.
-    pub fn validate(&self) -> Result<LossValues, TrainError> {
+    /// Mean losses over the fixed validation batches: on their targets, and on reconstructing
+    /// their contexts.
+    pub fn validate(&self) -> Result<(LossValues, LossValues), TrainError> {
+        let contexts: Vec<Batch> = self
+            .val_set
+            .iter()
+            .map(Batch::contexts_as_targets)
+            .collect();
+        Ok((self.mean_loss(&self.val_set)?, self.mean_loss(&contexts)?))
+    }
+
+    fn mean_loss(&self, batches: &[Batch]) -> Result<LossValues, TrainError> {
         let mut sum = LossValues {
             total: 0.0,
             image_nll: 0.0,
@@ -212,7 +236,7 @@ impl Trainer {
             image_mse: 0.0,
             joint_mse: 0.0,
         };
-        for batch in &self.val_set {
+        for batch in batches {
             let batch = tensors(batch, &self.device)?;
             let prediction = self.model.forward(&batch)?;
             let v = self.model.loss(&prediction, &batch)?.values();
@@ -222,7 +246,7 @@ impl Trainer {
             sum.image_mse += v.image_mse;
             sum.joint_mse += v.joint_mse;
         }
-        let n = self.val_set.len().max(1) as f32;
+        let n = batches.len().max(1) as f32;
         Ok(LossValues {
             total: sum.total / n,
             image_nll: sum.image_nll / n,
@@ -247,12 +271,12 @@ impl Trainer {
             let elapsed = timer.0.elapsed().as_secs_f64();
             let steps_per_s = (step - timer.1) as f64 / elapsed.max(1e-9);
             let val = if step % self.config.val_every == 0 || step == self.config.steps {
-                let v = self.validate()?;
+                let (v, c) = self.validate()?;
                 if self.best_val.is_none_or(|(_, best)| v.total < best) {
                     self.best_val = Some((step, v.total));
                 }
                 last_val = Some(v.total);
-                Some(v)
+                Some((v, c))
             } else {
                 None
             };
@@ -264,9 +288,12 @@ impl Trainer {
                 joint_nll: values.joint_nll,
                 image_mse: values.image_mse,
                 joint_mse: values.joint_mse,
-                val_loss: val.as_ref().map(|v| v.total),
-                val_image_mse: val.as_ref().map(|v| v.image_mse),
-                val_joint_mse: val.as_ref().map(|v| v.joint_mse),
+                val_loss: val.map(|(v, _)| v.total),
+                val_image_mse: val.map(|(v, _)| v.image_mse),
+                val_joint_mse: val.map(|(v, _)| v.joint_mse),
+                val_context_loss: val.map(|(_, c)| c.total),
+                val_context_image_mse: val.map(|(_, c)| c.image_mse),
+                val_context_joint_mse: val.map(|(_, c)| c.joint_mse),
                 steps_per_s,
             })?;
             if step % self.config.checkpoint_every == 0 || step == self.config.steps {

@@ -2,13 +2,17 @@ use std::sync::atomic::{AtomicU32, Ordering};
 
 use wasm_bindgen::prelude::*;
 
+use serde::Serialize;
+
 use super::encoding::{decoded_object, Encoding};
+use super::Episode;
 use crate::predict::{Observations, Predictor, SequencePrediction};
+use crate::quality::{score_sequence, Quality, Scenario};
 
 /// Tells models apart, so an encoding is only ever decoded by the model that made it.
 static NEXT_ID: AtomicU32 = AtomicU32::new(1);
 
-/// A trained DMBN or DMBN-PTE for inference in the browser: `Model.fromBytes(bytes)`, then
+/// A trained DMBN, DMBN-PTE or attentive model for inference in the browser: `Model.fromBytes(bytes)`, then
 /// `predict(...)` in one call, or, as the demo page's worker does, `encode(...)` the
 /// observations once and `decode(...)` target times in as many chunks as wanted. Wraps
 /// [`Predictor`], the same code the native `dmbn predict` runs.
@@ -29,7 +33,7 @@ impl ModelHandle {
         })
     }
 
-    /// `"dmbn"` or `"pte"`.
+    /// `"dmbn"`, `"pte"` or `"attn"`.
     #[wasm_bindgen(getter)]
     pub fn kind(&self) -> String {
         self.inner.model().kind().to_string()
@@ -93,6 +97,49 @@ impl ModelHandle {
         }
         decoded_object(&self.inner.decode(&encoding.inner, &target_times)?)
     }
+
+    /// The quality benchmark on one episode (what `dmbn score` computes per sequence):
+    /// `scenario` `"interp"` (`observations` evenly spaced steps, every step scored) or
+    /// `"extrap"` (the first 30% observed at 3 steps, the rest scored), with `blend`. Returns
+    /// `{model, baseline}`, each with the fields `dmbn score --json` writes (`joint_rmse`,
+    /// `image_mse`, `observed_joint_rmse`, `object_iou`, …); `null` when the episode is too
+    /// short for the scenario.
+    pub fn score(
+        &self,
+        episode: &Episode,
+        scenario: &str,
+        observations: usize,
+        blend: f32,
+    ) -> Result<JsValue, JsError> {
+        let scenario: Scenario = scenario.parse().map_err(|e: String| JsError::new(&e))?;
+        let scores = score_sequence(
+            &self.inner,
+            episode.sequence(),
+            "",
+            scenario,
+            observations,
+            blend,
+            None,
+        )?;
+        let Some(scores) = scores else {
+            return Ok(JsValue::NULL);
+        };
+        let serializer = serde_wasm_bindgen::Serializer::json_compatible();
+        let value = ScoreValue {
+            model: scores.model.finish(),
+            baseline: scores.baseline.finish(),
+        };
+        value
+            .serialize(&serializer)
+            .map_err(|e| JsError::new(&e.to_string()))
+    }
+}
+
+/// What `Model.score` returns.
+#[derive(Serialize)]
+struct ScoreValue {
+    model: Quality,
+    baseline: Quality,
 }
 
 impl ModelHandle {

@@ -42,8 +42,9 @@ function close(a, b, tol, what) {
 }
 
 describe("Model.encode / Model.decode (the page's worker API)", () => {
-  for (const [kind, file] of [["dmbn", "dmbn-sim.dmbn"], ["pte", "pte-sim.dmbn"]]) {
-    test(`${kind}: chunked encode/decode equals Model.predict`, () => {
+  // Every model the page offers (its ids: attn, dmbn, pte, pte-aug), with the kind its file holds.
+  for (const [kind, file] of [["attn", "attn-sim.dmbn"], ["dmbn", "dmbn-sim.dmbn"], ["pte", "pte-sim.dmbn"], ["pte", "pte-aug-sim.dmbn"]]) {
+    test(`${file} (${kind}): chunked encode/decode equals Model.predict`, () => {
       const bytes = weights(file);
       const model = wasm.Model.fromBytes(bytes);
       // A second instance of the same weights: encode/decode need not be the predicting one.

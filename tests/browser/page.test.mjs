@@ -127,8 +127,17 @@ describe("demo page", () => {
         .map((el) => el.id),
     );
     assert.deepEqual(unlabelled, []);
+    // Four models, the attentive one first and chosen: the page loads it.
+    const options = await page.evaluate(() => [...document.getElementById("model").options].map((o) => o.value));
+    assert.deepEqual(options, ["attn", "dmbn", "pte", "pte-aug"]);
+    assert.equal(await page.inputValue("#model"), "attn");
     const timings = await page.evaluate(() => window.dmbnTimings);
-    assert.ok(timings.ready_ms > 0 && timings.models.dmbn.bytes > 0);
+    assert.ok(timings.ready_ms > 0 && timings.models.attn.bytes > 0);
+    assert.equal(timings.models.attn.fileKind, "attn");
+    assert.deepEqual(Object.keys(timings.models), ["attn"], "only the default model is loaded");
+    const status = await page.textContent("#status");
+    assert.match(status, /^Attentive \(DMBN-PTE \+ attention\) ready: attn-sim\.dmbn, [\d.]+ MB/);
+    assert.doesNotMatch(status, /note/);
     await shot(page, "ready");
     assert.deepEqual(page.problems, []);
     await close(page);
@@ -280,8 +289,10 @@ describe("demo page", () => {
     const page = await open(`${server.url}www/?action=grasp&seed=11&obs=0,8,16,30,44`);
     await waitState(page, "ready");
     await pause(page);
+    assert.equal(await page.inputValue("#model"), "attn", "the attentive model is the default");
     await predict(page);
-    const seen = new Map([["dmbn t both", await output(page)]]);
+    assert.equal(await page.evaluate(() => window.dmbnTimings.prediction.model), "attn");
+    const seen = new Map([["attn t both", await output(page)]]);
     // Each change predicts again (the page is live after the first prediction); a new setting
     // gives a new output, a setting seen before gives the same output again (deterministic).
     const change = async (select, value, label) => {
@@ -295,11 +306,16 @@ describe("demo page", () => {
       seen.set(label, out);
       await shot(page, `switch-${label.replaceAll(" ", "-")}`);
     };
+    await change("#model", "pte-aug", "pte-aug t both");
+    assert.match(page.url(), /model=pte-aug/);
     await change("#model", "pte", "pte t both");
     await change("#mode", "p", "pte p both");
     await change("#mode", "f", "pte f both");
     await change("#model", "dmbn", "dmbn f both");
     await change("#mode", "t", "dmbn t both");
+    await change("#model", "attn", "attn t both");
+    assert.match(page.url(), /model=attn/);
+    await change("#model", "dmbn", "dmbn t both");
     await change("#observe", "joints", "dmbn t joints");
     await change("#observe", "images", "dmbn t images");
     assert.match(page.url(), /model=dmbn.*mode=t.*observe=images/);
@@ -314,22 +330,44 @@ describe("demo page", () => {
   });
 
   test("corrupt weights show a clear error", async () => {
-    const page = await open(`${server.url}www/?dmbn=/test/corrupt.dmbn`);
+    const page = await open(`${server.url}www/?model=dmbn&dmbn=/test/corrupt.dmbn`);
     await waitState(page, "error");
     const text = await errorText(page);
     assert.match(text, /DMBN weights .*corrupt\.dmbn are corrupt or not a model file/);
     assert.equal(await page.locator("#error").isVisible(), true);
     await shot(page, "error-corrupt-weights");
     await close(page);
+    // The default model's file is overridable too (`?attn=`).
+    const attn = await open(`${server.url}www/?attn=/test/corrupt.dmbn`);
+    await waitState(attn, "error");
+    assert.match(await errorText(attn), /Attentive \(DMBN-PTE \+ attention\) weights .*corrupt\.dmbn are corrupt or not a model file/);
+    await close(attn);
+  });
+
+  test("a file of another kind than the model's is noted", async () => {
+    // pte-aug expects a DMBN-PTE file: the shipped DMBN-PTE weights are no mismatch, DMBN's are.
+    const page = await open(`${server.url}www/?model=pte-aug&pte-aug=../assets/models/pte-sim.dmbn`);
+    await waitState(page, "ready");
+    const status = await page.textContent("#status");
+    assert.match(status, /^DMBN-PTE \+ time warps ready: pte-sim\.dmbn/);
+    assert.doesNotMatch(status, /note/);
+    await close(page);
+    const other = await open(`${server.url}www/?model=pte-aug&pte-aug=../assets/models/dmbn-sim.dmbn`);
+    await waitState(other, "ready");
+    assert.match(await other.textContent("#status"), /^DMBN-PTE \+ time warps ready: dmbn-sim\.dmbn.* — note: the file holds a DMBN model$/);
+    await close(other);
   });
 
   test("missing weights show a clear error, and the page recovers with the other model", async () => {
-    const page = await open(`${server.url}www/?pte=../assets/models/no-such-file.dmbn`);
+    const page = await open(`${server.url}www/?pte=../assets/models/no-such-file.dmbn&pte-aug=../assets/models/no-such-file-either.dmbn`);
     await waitState(page, "ready");
     await page.selectOption("#model", "pte");
     await waitState(page, "error");
     assert.match(await errorText(page), /DMBN-PTE weights.*HTTP 404/);
     await shot(page, "error-missing-weights");
+    await page.selectOption("#model", "pte-aug");
+    await waitState(page, "error");
+    assert.match(await errorText(page), /DMBN-PTE \+ time warps weights.*no-such-file-either\.dmbn.*HTTP 404/);
     await page.selectOption("#model", "dmbn");
     await waitState(page, "ready");
     assert.equal(await page.locator("#error").isHidden(), true);

@@ -9,7 +9,7 @@ use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use thiserror::Error;
 
-use crate::{eval, predict};
+use crate::{eval, predict, score};
 use dmbn::data::{DataError, Dataset, DatasetWriter, Sequence, Summary};
 use dmbn::figure::FigureError;
 use dmbn::model::ModelError;
@@ -19,7 +19,7 @@ use dmbn::sim::{self, Action, SimError};
 #[command(
     name = "dmbn",
     version,
-    about = "DMBN datasets and models: simulate, inspect, predict, eval, probe"
+    about = "DMBN datasets and models: simulate, inspect, predict, eval, probe, score"
 )]
 struct Cli {
     #[command(subcommand)]
@@ -74,6 +74,15 @@ enum Command {
     ///
     /// Writes probe.md (the table) and probe.json (every seed's MSE).
     Probe(eval::ProbeArgs),
+    /// The quality benchmark: models against the trivial baselines on held-out sequences.
+    ///
+    /// interp: K evenly spaced observations, every step predicted; extrap: the first 30%
+    /// observed at 3 steps, the rest predicted. Baselines: joints linearly interpolated between
+    /// the observations (held outside them) and the nearest observation's frame — holding the
+    /// last observation for extrap — and, with --mean-ids, each action's mean motion. Prints a
+    /// table per scenario (joint RMSE in radians, gripper error, image MSE, errors at the
+    /// observed steps, object visibility, NLL); --json writes them.
+    Score(score::ScoreArgs),
 }
 
 /// Everything a command can fail with; printed as `error: <message>`.
@@ -139,6 +148,7 @@ pub fn main() -> ExitCode {
         Command::Predict(args) => predict::run(args),
         Command::Eval(args) => eval::run_eval(args),
         Command::Probe(args) => eval::run_probe(args),
+        Command::Score(args) => score::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

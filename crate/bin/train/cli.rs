@@ -15,6 +15,8 @@ enum Kind {
     Dmbn,
     /// DMBN-PTE, positional time encoding (the paper's fix).
     Pte,
+    /// The attentive model: DMBN-PTE's encodings, cross-attention over the context times.
+    Attn,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -24,7 +26,7 @@ enum ScheduleArg {
     Step,
 }
 
-/// Train DMBN or DMBN-PTE. Writes metrics.jsonl, checkpoint/ (every --checkpoint-every
+/// Train DMBN, DMBN-PTE or the attentive model. Writes metrics.jsonl, checkpoint/ (every --checkpoint-every
 /// steps, atomically) and, at the end, model.dmbn into --out.
 #[derive(Parser)]
 #[command(name = "train", version)]
@@ -53,6 +55,14 @@ struct Args {
     /// Targets per sequence.
     #[arg(long, default_value_t = 4)]
     targets_per_sequence: usize,
+    /// Targets ⊇ contexts: each sequence's contexts lead its --targets-per-sequence targets
+    /// (the reference CNP's training); otherwise every target is another step.
+    #[arg(long)]
+    contexts_in_targets: bool,
+    /// Joint-only targets per sequence on top of the full ones: the joints are supervised at
+    /// that many more steps, at a small cost (no frame is decoded for them).
+    #[arg(long, default_value_t = 0)]
+    joint_targets: usize,
     /// Frame size the model works at (64 or 128; frames are resized when read).
     #[arg(long, default_value_t = 64)]
     image_size: usize,
@@ -115,11 +125,14 @@ fn run(args: Args) -> Result<(), TrainError> {
         let model = match args.model {
             Kind::Dmbn => ModelKind::Dmbn,
             Kind::Pte => ModelKind::Pte,
+            Kind::Attn => ModelKind::Attn,
         };
         let mut config = TrainConfig::new(model, steps, args.seed);
         config.batch = args.batch;
         config.max_contexts = args.max_contexts;
         config.targets_per_sequence = args.targets_per_sequence;
+        config.contexts_in_targets = args.contexts_in_targets;
+        config.joint_targets = args.joint_targets;
         config.image_size = args.image_size;
         config.lr = args.lr;
         config.schedule = match args.schedule {

@@ -1,0 +1,14 @@
+/// Extra targets of a [`Batch`](super::Batch) where only the joints are supervised: decoding
+/// joints costs a few small layers per target, a frame most of the network, so training
+/// scores the joints at many more steps than it decodes frames for.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct JointTargets {
+    /// B: sequences, as the batch.
+    pub batch: usize,
+    /// M_j: joint-only targets per sequence (0: none).
+    pub targets: usize,
+    /// `[B, M_j]`: their times.
+    pub times: Vec<f32>,
+    /// `[B, M_j, 7]`: their joints, normalised.
+    pub joints: Vec<f32>,
+}

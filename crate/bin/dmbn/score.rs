@@ -1,0 +1,199 @@
+//! `dmbn score`: the quality benchmark (models against the trivial baselines on held-out
+//! sequences).
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+
+use clap::{Args, ValueEnum};
+
+use dmbn::data::{Dataset, Sequence};
+use dmbn::predict::Predictor;
+use dmbn::quality::{score_sequence, Accumulator, MeanMotion, QualityReport, QualityRow, Scenario};
+
+use crate::cli::{progress, CliError};
+use crate::predict::{parse_blend, write_json};
+
+#[derive(Clone, Copy, PartialEq, ValueEnum)]
+enum ScenarioArg {
+    /// K evenly spaced observations (first and last included), every step predicted.
+    Interp,
+    /// The first 30% observed at 3 steps, the rest predicted.
+    Extrap,
+    /// Both.
+    All,
+}
+
+#[derive(Args)]
+pub struct ScoreArgs {
+    /// Model file; repeat to compare models on the same sequences.
+    #[arg(long = "model", required = true)]
+    models: Vec<PathBuf>,
+    /// Dataset root in the DMBN layout.
+    #[arg(long)]
+    data: PathBuf,
+    /// Sequence ids to score, A-B inclusive (default: every id). Use ids the models never
+    /// trained on.
+    #[arg(long, value_parser = parse_ids)]
+    ids: Option<(u32, u32)>,
+    /// Observations per sequence in `interp` (K ≥ 2).
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(2..))]
+    observations: u32,
+    /// Which scenario.
+    #[arg(long, value_enum, default_value = "all")]
+    scenario: ScenarioArg,
+    /// Blending coefficient c: 1 = images only, 0 = joints only.
+    #[arg(long, default_value_t = 0.5, value_parser = parse_blend)]
+    blend: f32,
+    /// Also score each action's mean motion over these ids of --data (A-B; e.g. the training
+    /// ids): what a model that ignores its observations would predict.
+    #[arg(long, value_parser = parse_ids)]
+    mean_ids: Option<(u32, u32)>,
+    /// Write the reports as JSON here (a list, one per scenario).
+    #[arg(long)]
+    json: Option<PathBuf>,
+}
+
+/// `A-B` (inclusive) or a single id.
+pub(crate) fn parse_ids(s: &str) -> Result<(u32, u32), String> {
+    let bad = || format!("{s:?} is not an id range: expected A-B (e.g. 180-199) or one id");
+    let (a, b) = s.split_once('-').unwrap_or((s, s));
+    let (a, b): (u32, u32) = (
+        a.trim().parse().map_err(|_| bad())?,
+        b.trim().parse().map_err(|_| bad())?,
+    );
+    if a > b {
+        return Err(format!("{s:?}: the first id must not be above the last"));
+    }
+    Ok((a, b))
+}
+
+pub fn run(args: ScoreArgs) -> Result<(), CliError> {
+    let predictors = args
+        .models
+        .iter()
+        .map(|path| Ok((path, Predictor::load(path)?)))
+        .collect::<Result<Vec<_>, CliError>>()?;
+    let dataset = Dataset::open(&args.data)?;
+    let in_range =
+        |id: u32, range: Option<(u32, u32)>| range.is_none_or(|(a, b)| (a..=b).contains(&id));
+    let refs: Vec<_> = dataset
+        .sequences()
+        .iter()
+        .filter(|s| in_range(s.id, args.ids))
+        .collect();
+    if refs.is_empty() {
+        return Err(CliError::Usage(format!(
+            "{}: no sequence with an id in {:?}",
+            args.data.display(),
+            args.ids.unwrap_or_default()
+        )));
+    }
+    let scenarios: Vec<Scenario> = match args.scenario {
+        ScenarioArg::Interp => vec![Scenario::Interp],
+        ScenarioArg::Extrap => vec![Scenario::Extrap],
+        ScenarioArg::All => Scenario::ALL.to_vec(),
+    };
+    // Sequences and mean motions at each frame size the models need.
+    // Per frame size: the sequences (with their action) and the mean motions.
+    type Sequences = Vec<(String, Sequence)>;
+    let mut by_size: BTreeMap<usize, (Sequences, Option<MeanMotion>)> = BTreeMap::new();
+    for (_, predictor) in &predictors {
+        let size = predictor.model().image_size();
+        if by_size.contains_key(&size) {
+            continue;
+        }
+        let sequences = refs
+            .iter()
+            .map(|r| Ok((r.action.clone(), dataset.read(r, Some(size as u32))?)))
+            .collect::<Result<Vec<_>, CliError>>()?;
+        let mean = match args.mean_ids {
+            None => None,
+            Some(range) => {
+                let reference = dataset
+                    .sequences()
+                    .iter()
+                    .filter(|s| in_range(s.id, Some(range)))
+                    .map(|r| Ok((r.action.clone(), dataset.read(r, Some(size as u32))?)))
+                    .collect::<Result<Vec<_>, CliError>>()?;
+                let fitted = MeanMotion::fit(reference.iter().map(|(a, s)| (a.as_str(), s)));
+                Some(fitted.ok_or_else(|| {
+                    CliError::Usage(format!("--mean-ids {range:?}: no sequence in that range"))
+                })?)
+            }
+        };
+        by_size.insert(size, (sequences, mean));
+    }
+
+    let observations = args.observations as usize;
+    let mut reports = Vec::new();
+    for &scenario in &scenarios {
+        let mut baseline = Accumulator::default();
+        let mut mean_motion: Option<Accumulator> = None;
+        let mut rows = Vec::new();
+        for (index, (path, predictor)) in predictors.iter().enumerate() {
+            let (sequences, mean) = &by_size[&predictor.model().image_size()];
+            let bar = progress(sequences.len(), &format!("{scenario} {}", path.display()));
+            let mut model = Accumulator::default();
+            for (action, seq) in sequences {
+                let scores = score_sequence(
+                    predictor,
+                    seq,
+                    action,
+                    scenario,
+                    observations,
+                    args.blend,
+                    mean.as_ref(),
+                )?;
+                bar.inc(1);
+                let Some(scores) = scores else { continue };
+                model.merge(&scores.model);
+                // Baselines do not depend on the model: count them once.
+                if index == 0 {
+                    baseline.merge(&scores.baseline);
+                    if let Some(m) = &scores.mean_motion {
+                        mean_motion
+                            .get_or_insert_with(Accumulator::default)
+                            .merge(m);
+                    }
+                }
+            }
+            bar.finish_and_clear();
+            let name = path.file_name().map_or_else(
+                || path.display().to_string(),
+                |n| n.to_string_lossy().into_owned(),
+            );
+            rows.push(QualityRow {
+                name,
+                model: true,
+                quality: model.finish(),
+            });
+        }
+        rows.push(QualityRow {
+            name: scenario.baseline_name().to_string(),
+            model: false,
+            quality: baseline.finish(),
+        });
+        if let Some(m) = mean_motion {
+            rows.push(QualityRow {
+                name: "mean motion of the action".to_string(),
+                model: false,
+                quality: m.finish(),
+            });
+        }
+        let report = QualityReport {
+            scenario,
+            observations: match scenario {
+                Scenario::Interp => observations,
+                Scenario::Extrap => Scenario::EXTRAP_OBSERVATIONS,
+            },
+            blend: args.blend,
+            rows,
+        };
+        println!("{}", report.markdown());
+        reports.push(report);
+    }
+    if let Some(path) = &args.json {
+        write_json(path, &reports)?;
+        println!("wrote {}", path.display());
+    }
+    Ok(())
+}

@@ -1,0 +1,147 @@
+use burn::config::Config;
+use burn::module::Module;
+use burn::nn::attention::{MhaInput, MultiHeadAttention, MultiHeadAttentionConfig};
+use burn::tensor::{Device, Tensor};
+
+use super::config::{decoder_filters, encoder_filters};
+use super::context_projection::{ContextProjection, ContextProjectionConfig};
+use super::decoder::{Decoder, DecoderConfig};
+use super::dmbn_pte::pte_context_encodings;
+use super::image_encoder::{ImageEncoder, ImageEncoderConfig};
+use super::joint_encoder::{JointEncoder, JointEncoderConfig};
+use super::time_embedding::{TimeEmbedding, TimeEmbeddingConfig};
+use super::time_projection::{TimeProjection, TimeProjectionConfig};
+use super::{AttentiveContexts, BatchTensors, ContextEncodings, ModelError, Prediction};
+
+/// Configuration of a [`DmbnAttn`].
+#[derive(Config, Debug)]
+pub struct DmbnAttnConfig {
+    /// Frame width and height: 64 or 128.
+    #[config(default = 64)]
+    pub image_size: usize,
+    /// Size of the context encodings, of P(t) and of the representation (H).
+    #[config(default = 128)]
+    pub hidden: usize,
+    /// Attention heads (H must be a multiple).
+    #[config(default = 8)]
+    pub heads: usize,
+    /// Lower bound of every predicted σ.
+    #[config(default = 0.01)]
+    pub sigma_floor: f64,
+}
+
+/// The attentive model (`attn`): DMBN-PTE's context encodings, aggregated per target by
+/// cross-attention instead of a mean (Kim et al. 2019, "Attentive Neural Processes": a
+/// mean-aggregated CNP underfits and misses its own context points):
+///
+/// - each context: z_m = g_m(e_m(x) + P(t)), as DMBN-PTE;
+/// - per target and modality, multi-head attention with the target time's embedding as the
+///   query, the contexts' time embeddings as keys and their z_m as values;
+/// - blend r_t = c·a_image + (1 − c)·a_joint, then r_t − P(t_target) into the same decoders.
+#[derive(Module, Debug)]
+pub struct DmbnAttn {
+    /// e_image, on 3 channels.
+    pub image_encoder: ImageEncoder,
+    /// e_joint, on 7 values.
+    pub joint_encoder: JointEncoder,
+    /// P(t), shared by contexts of both modalities and by targets.
+    pub time: TimeProjection,
+    /// g_image.
+    pub image_projection: ContextProjection,
+    /// g_joint.
+    pub joint_projection: ContextProjection,
+    /// Queries and keys: the embedding of target and context times.
+    pub time_embedding: TimeEmbedding,
+    /// Attention over the image contexts.
+    pub image_attention: MultiHeadAttention,
+    /// Attention over the joint contexts.
+    pub joint_attention: MultiHeadAttention,
+    /// Shared layer, image and joint decoders.
+    pub decoder: Decoder,
+}
+
+impl DmbnAttnConfig {
+    /// Builds the network; fails on an unsupported image size or a head count that does not
+    /// divide H.
+    pub fn init(&self, device: &Device) -> Result<DmbnAttn, ModelError> {
+        if self.heads == 0 || self.hidden % self.heads != 0 {
+            return Err(ModelError::config(
+                "heads",
+                format!(
+                    "is {}: expected a divisor of hidden ({})",
+                    self.heads, self.hidden
+                ),
+            ));
+        }
+        let projection = ContextProjectionConfig::new().with_hidden(self.hidden);
+        let attention = MultiHeadAttentionConfig::new(self.hidden, self.heads).with_dropout(0.0);
+        Ok(DmbnAttn {
+            image_encoder: ImageEncoderConfig::new(3, encoder_filters(self.image_size)?)
+                .with_hidden(self.hidden)
+                .init(device),
+            joint_encoder: JointEncoderConfig::new(7)
+                .with_hidden(self.hidden)
+                .init(device),
+            time: TimeProjectionConfig::new()
+                .with_hidden(self.hidden)
+                .init(device),
+            image_projection: projection.init(device),
+            joint_projection: projection.init(device),
+            time_embedding: TimeEmbeddingConfig::new()
+                .with_hidden(self.hidden)
+                .init(device),
+            image_attention: attention.init(device),
+            joint_attention: attention.init(device),
+            decoder: DecoderConfig::new(self.hidden, decoder_filters(self.image_size)?)
+                .with_sigma_floor(self.sigma_floor)
+                .init(device),
+        })
+    }
+}
+
+impl DmbnAttn {
+    /// Every context slot's z per modality, `[B, N, H]` each (padding included).
+    pub fn encode_contexts(&self, batch: &BatchTensors) -> ContextEncodings {
+        pte_context_encodings(
+            &self.image_encoder,
+            &self.joint_encoder,
+            &self.time,
+            [&self.image_projection, &self.joint_projection],
+            batch,
+        )
+    }
+
+    /// The contexts every target attends to: their encodings, keys and padding.
+    pub fn encode(&self, batch: &BatchTensors) -> AttentiveContexts {
+        let encodings = self.encode_contexts(batch);
+        AttentiveContexts {
+            image: encodings.image,
+            joint: encodings.joint,
+            keys: self.time_embedding.forward(batch.context_times.clone()),
+            padding: batch.context_mask.clone().equal_elem(0.0),
+            blend: batch.blend.clone(),
+        }
+    }
+
+    /// The decoder input at `[B, M]` target times, `[B, M, H]`: per target, attention over
+    /// each modality's contexts, blended, minus P(t_target).
+    pub fn condition(&self, contexts: &AttentiveContexts, target_times: Tensor<2>) -> Tensor<3> {
+        let queries = self.time_embedding.forward(target_times.clone());
+        let attend = |attention: &MultiHeadAttention, values: &Tensor<3>| {
+            let input = MhaInput::new(queries.clone(), contexts.keys.clone(), values.clone())
+                .mask_pad(contexts.padding.clone());
+            attention.forward(input).context
+        };
+        let image = attend(&self.image_attention, &contexts.image);
+        let joint = attend(&self.joint_attention, &contexts.joint);
+        let c = contexts.blend.clone().unsqueeze_dims::<3>(&[1, 2]);
+        let r = image * c.clone() + joint * c.neg().add_scalar(1.0);
+        r - self.time.forward(target_times)
+    }
+
+    /// Encode the contexts and decode the batch's target times.
+    pub fn forward(&self, batch: &BatchTensors) -> Prediction {
+        let x = self.condition(&self.encode(batch), batch.target_times.clone());
+        self.decoder.forward(x)
+    }
+}

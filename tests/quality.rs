@@ -1,0 +1,177 @@
+//! The quality benchmark: the golden scores of the default model (which the wasm tests must
+//! reproduce), `dmbn score` end to end, and the bars every shipped model must clear on
+//! simulated episodes it never saw.
+#![cfg(not(target_arch = "wasm32"))]
+
+#[path = "golden/score.rs"]
+mod golden_score;
+mod support;
+
+use std::path::Path;
+
+use burn::tensor::Device;
+use dmbn::data::{Normalization, Sequence};
+use dmbn::model::{ModelConfig, ModelKind};
+use dmbn::predict::Predictor;
+use dmbn::quality::{score_sequence, Accumulator, MeanMotion, Quality, Scenario, SequenceScores};
+use dmbn::sim::{episode, Action};
+use golden_score as golden;
+
+/// The shipped simulator weights; the first is the page's default.
+const SHIPPED_SIM: [&str; 4] = ["attn-sim", "dmbn-sim", "pte-sim", "pte-aug-sim"];
+
+#[test]
+fn default_model_reproduces_the_golden_scores() {
+    let predictor = Predictor::from_bytes(golden::MODEL).unwrap();
+    let seq = episode(Action::Grasp, golden::SEED, 64).unwrap();
+    let samples: Vec<Vec<f64>> = golden::SCENARIOS
+        .iter()
+        .map(|&scenario| {
+            let s = score_sequence(
+                &predictor,
+                &seq,
+                "grasp",
+                scenario,
+                golden::OBSERVATIONS,
+                golden::BLEND,
+                None,
+            )
+            .unwrap()
+            .expect("long enough");
+            golden::sample(&s.model.finish(), &s.baseline.finish())
+        })
+        .collect();
+    if std::env::var_os("DMBN_BLESS").is_some() {
+        let json: Vec<Vec<Option<f64>>> = samples
+            .iter()
+            .map(|row| row.iter().map(|v| (!v.is_nan()).then_some(*v)).collect())
+            .collect();
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/golden/score.json");
+        std::fs::write(&path, serde_json::to_string(&json).unwrap()).unwrap();
+        return;
+    }
+    let expected = golden::expected();
+    assert_eq!(
+        samples.len(),
+        expected.len(),
+        "re-bless tests/golden/score.json with DMBN_BLESS=1"
+    );
+    for (got, want) in samples.iter().zip(&expected) {
+        let (diff, at) = golden::max_diff(got, want);
+        assert!(
+            diff < 1e-6,
+            "differs from tests/golden/score.json by {diff} at {at}"
+        );
+    }
+    // The baseline reproduces its observations (up to rounding the frames to f32).
+    assert_eq!(samples[0][9 + 3], 0.0);
+    assert!(samples[0][9 + 4] < 1e-12);
+}
+
+/// Episodes no shipped model trained on (the simulator weights trained on seeds 1000-1999),
+/// both actions.
+fn unseen() -> Vec<(&'static str, Sequence)> {
+    (0..3)
+        .flat_map(|i| Action::ALL.map(|a| (a.name(), episode(a, 200_000 + i, 64).unwrap())))
+        .collect()
+}
+
+/// Each action's mean motion over 10 other unseen episodes.
+fn mean_motion() -> MeanMotion {
+    let reference: Vec<(&str, Sequence)> = (0..10)
+        .flat_map(|i| Action::ALL.map(|a| (a.name(), episode(a, 300_000 + i, 64).unwrap())))
+        .collect();
+    MeanMotion::fit(reference.iter().map(|(a, s)| (*a, s))).unwrap()
+}
+
+/// The model's, the baseline's and the mean motion's measures over `seqs`.
+fn measure(
+    predictor: &Predictor,
+    seqs: &[(&str, Sequence)],
+    scenario: Scenario,
+    mean: &MeanMotion,
+) -> (Quality, Quality, Quality) {
+    let mut acc = SequenceScores {
+        mean_motion: Some(Accumulator::default()),
+        ..Default::default()
+    };
+    for (action, seq) in seqs {
+        let s = score_sequence(predictor, seq, action, scenario, 5, 0.5, Some(mean))
+            .unwrap()
+            .unwrap();
+        acc.model.merge(&s.model);
+        acc.baseline.merge(&s.baseline);
+        acc.mean_motion
+            .as_mut()
+            .unwrap()
+            .merge(s.mean_motion.as_ref().unwrap());
+    }
+    (
+        acc.model.finish(),
+        acc.baseline.finish(),
+        acc.mean_motion.unwrap().finish(),
+    )
+}
+
+/// An untrained model of `kind`, seeded.
+fn untrained(kind: ModelKind) -> Predictor {
+    let device = Device::flex();
+    device.seed(5);
+    let model = ModelConfig::new(kind).init(&device).unwrap();
+    model.draw_weights();
+    Predictor::new(model, Normalization::identity())
+}
+
+/// A model that ignores its observations scores like the action's mean motion at best:
+/// every shipped simulator model must do clearly better on episodes it never saw, and better
+/// than an untrained model of its kind.
+#[test]
+fn shipped_simulator_models_use_their_observations() {
+    let (seqs, mean) = (unseen(), mean_motion());
+    for name in SHIPPED_SIM {
+        let predictor = Predictor::load(support::asset(&format!("models/{name}.dmbn"))).unwrap();
+        let (model, _, mean_motion) = measure(&predictor, &seqs, Scenario::Interp, &mean);
+        let (fresh, _, _) = measure(
+            &untrained(predictor.model().kind()),
+            &seqs,
+            Scenario::Interp,
+            &mean,
+        );
+        println!("{name}: {model:?}\nmean motion: {mean_motion:?}");
+        for (what, got, mean, fresh) in [
+            (
+                "joint RMSE",
+                model.joint_rmse,
+                mean_motion.joint_rmse,
+                fresh.joint_rmse,
+            ),
+            (
+                "joint RMSE at the observed steps",
+                model.observed_joint_rmse,
+                mean_motion.observed_joint_rmse,
+                fresh.observed_joint_rmse,
+            ),
+            (
+                "image MSE",
+                model.image_mse,
+                mean_motion.image_mse,
+                fresh.image_mse,
+            ),
+            (
+                "image MSE at the observed steps",
+                model.observed_image_mse,
+                mean_motion.observed_image_mse,
+                fresh.observed_image_mse,
+            ),
+        ] {
+            assert!(
+                got < 0.8 * mean,
+                "{name}: {what} {got:.5}, the mean motion's {mean:.5}"
+            );
+            assert!(
+                got < 0.8 * fresh,
+                "{name}: {what} {got:.5}, an untrained model's {fresh:.5}"
+            );
+        }
+    }
+}
