@@ -154,7 +154,7 @@ try {
   if (screenshot) {
     const context = await browser.newContext({ viewport: { width: 1280, height: 900 } });
     const page = await context.newPage();
-    await page.goto(`${server.url}www/?action=move&seed=5&model=pte&obs=0,14,29,44,58,72&chunkDelay=250`);
+    await page.goto(`${server.url}www/?action=move&seed=5&model=attn&obs=0,14,29,44,58,72&chunkDelay=250`);
     await waitState(page, "ready");
     await page.click("#play");
     await page.click("#predict");

@@ -13,7 +13,8 @@ use dmbn::predict::{Observations, Predictor};
 use dmbn::sim::{episode, Action};
 
 /// Every shipped model file and what it must hold.
-const SHIPPED: [(&str, ModelKind); 6] = [
+const SHIPPED: [(&str, ModelKind); 7] = [
+    ("attn-sim", ModelKind::Attn),
     ("dmbn-sim", ModelKind::Dmbn),
     ("pte-sim", ModelKind::Pte),
     ("pte-aug-sim", ModelKind::Pte),

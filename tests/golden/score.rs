@@ -6,7 +6,7 @@
 use dmbn::quality::{Quality, Scenario};
 
 /// The model scored: the page's default.
-pub const MODEL: &[u8] = include_bytes!("../../assets/models/dmbn-sim.dmbn");
+pub const MODEL: &[u8] = include_bytes!("../../assets/models/attn-sim.dmbn");
 /// Expected values, see [`sample`].
 pub const JSON: &str = include_str!("score.json");
 /// The episode: `episode(Action::Grasp, SEED, 64)`.
