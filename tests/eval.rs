@@ -2,16 +2,18 @@
 //! `dmbn eval` / `dmbn probe` end to end on generated data with small models.
 #![cfg(not(target_arch = "wasm32"))]
 
+mod support;
+
 use std::process::Command;
 
 use burn::tensor::Device;
-use dmbn::data::{DatasetWriter, Normalization};
+use dmbn::data::Normalization;
 use dmbn::eval::{
     diverged, evenly_spaced, fit_head, mean_ci95, split_warnings, time_variance, Divergence,
     Encodings, HeadConfig, ProbeReport, ProbeResult, ProbeRow,
 };
 use dmbn::model::{self, ModelConfig, ModelKind};
-use dmbn::sim::{episode, Action};
+use dmbn::sim::Action;
 use rand::{RngExt, SeedableRng};
 use rand_pcg::Pcg64;
 
@@ -224,17 +226,7 @@ fn dmbn(args: &[&str]) -> std::process::Output {
 fn dmbn_eval_and_probe_run_end_to_end() {
     let tmp = tempfile::tempdir().unwrap();
     let data = tmp.path().join("data");
-    let mut writer = DatasetWriter::create(&data).unwrap();
-    for id in 0..3u32 {
-        writer
-            .write(
-                id,
-                "grasp",
-                &episode(Action::Grasp, 20 + id as u64, 64).unwrap(),
-            )
-            .unwrap();
-    }
-    writer.finish().unwrap();
+    support::simulated_dataset(&data, 0..3, &[Action::Grasp], 20);
     let device = Device::flex();
     let mut paths = Vec::new();
     for kind in ModelKind::ALL {
@@ -346,17 +338,7 @@ fn dmbn_eval_and_probe_run_end_to_end() {
 
 /// A dataset of grasp episodes with the given ids (simulator seed 40 + id).
 fn write_dataset(root: &std::path::Path, ids: &[u32]) {
-    let mut writer = DatasetWriter::create(root).unwrap();
-    for &id in ids {
-        writer
-            .write(
-                id,
-                "grasp",
-                &episode(Action::Grasp, 40 + id as u64, 64).unwrap(),
-            )
-            .unwrap();
-    }
-    writer.finish().unwrap();
+    support::simulated_dataset(root, ids.iter().copied(), &[Action::Grasp], 40);
 }
 
 #[test]

@@ -11,7 +11,7 @@ use std::path::Path;
 use std::process::Command;
 
 use burn::tensor::Device;
-use dmbn::data::{DatasetWriter, Normalization, Sequence};
+use dmbn::data::{Normalization, Sequence};
 use dmbn::model::{ModelConfig, ModelKind};
 use dmbn::predict::Predictor;
 use dmbn::quality::{score_sequence, Accumulator, MeanMotion, Quality, Scenario, SequenceScores};
@@ -184,19 +184,7 @@ fn shipped_simulator_models_use_their_observations() {
 fn dmbn_score_prints_tables_and_writes_json() {
     let tmp = tempfile::tempdir().unwrap();
     let data = tmp.path().join("data");
-    let mut writer = DatasetWriter::create(&data).unwrap();
-    for id in 0..2u32 {
-        for action in Action::ALL {
-            writer
-                .write(
-                    id,
-                    action.name(),
-                    &episode(action, 400_000 + id as u64, 64).unwrap(),
-                )
-                .unwrap();
-        }
-    }
-    writer.finish().unwrap();
+    support::simulated_dataset(&data, 0..2, &Action::ALL, 400_000);
     let model = support::asset("models/dmbn-sim.dmbn");
     let json = tmp.path().join("score.json");
     let run = |args: &[&str]| {
@@ -259,7 +247,7 @@ fn dmbn_score_prints_tables_and_writes_json() {
         ),
         (
             vec!["--model", model_arg, "--data", data_arg, "--ids", "9-5"],
-            "must not be above",
+            "A (9) must not exceed B (5)",
         ),
         (
             vec![

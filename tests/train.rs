@@ -3,10 +3,11 @@
 //! bad settings are refused.
 #![cfg(not(target_arch = "wasm32"))]
 
+mod support;
+
 use std::path::Path;
 use std::sync::Mutex;
 
-use dmbn::data::DatasetWriter;
 use dmbn::model::ModelKind;
 use dmbn::predict::{Observations, Predictor};
 use dmbn::sim::{episode, Action};
@@ -14,19 +15,7 @@ use dmbn::train::{Checkpoint, Metrics, TrainConfig, TrainError, Trainer};
 
 /// A dataset of `n` ids × both actions from the simulator.
 fn dataset(dir: &Path, n: u32) {
-    let mut writer = DatasetWriter::create(dir).unwrap();
-    for id in 0..n {
-        for action in Action::ALL {
-            writer
-                .write(
-                    id,
-                    action.name(),
-                    &episode(action, 500 + id as u64, 64).unwrap(),
-                )
-                .unwrap();
-        }
-    }
-    writer.finish().unwrap();
+    support::simulated_dataset(dir, 0..n, &Action::ALL, 500);
 }
 
 fn small(model: ModelKind, steps: u64) -> TrainConfig {

@@ -1,3 +1,5 @@
+use crate::data::JOINTS;
+
 /// A training or inference batch as plain arrays (row-major), independent of any tensor
 /// library: the sampler fills it, the model turns it into tensors.
 ///
@@ -37,11 +39,10 @@ impl Batch {
     pub fn contexts_as_targets(&self) -> Batch {
         let (b, n) = (self.batch, self.contexts);
         let px = 3 * self.image_size * self.image_size;
-        let joints = self.context_joints.len() / (b * n).max(1);
         let mut out = Batch {
             targets: n,
             target_images: vec![0.0; b * n * px],
-            target_joints: vec![0.0; b * n * joints],
+            target_joints: vec![0.0; b * n * JOINTS],
             target_times: vec![0.0; b * n],
             ..self.clone()
         };
@@ -55,8 +56,8 @@ impl Batch {
                 let (from, to) = (s * n + j % real, s * n + j);
                 out.target_images[to * px..(to + 1) * px]
                     .copy_from_slice(&self.context_images[from * px..(from + 1) * px]);
-                out.target_joints[to * joints..(to + 1) * joints]
-                    .copy_from_slice(&self.context_joints[from * joints..(from + 1) * joints]);
+                out.target_joints[to * JOINTS..(to + 1) * JOINTS]
+                    .copy_from_slice(&self.context_joints[from * JOINTS..(from + 1) * JOINTS]);
                 out.target_times[to] = self.context_times[from];
             }
         }

@@ -98,7 +98,11 @@ impl Sampler {
             };
             fill(&mut batch, b, seq, contexts, &targets, norm);
             batch.blend[b] = rng.random_range(0.0f32..=1.0);
-            let times = seq.times();
+            let times = if cfg.joint_targets > 0 {
+                seq.times()
+            } else {
+                Vec::new()
+            };
             for _ in 0..cfg.joint_targets {
                 let k = rng.random_range(0..t);
                 joint_targets.times.push(times[k]);

@@ -88,13 +88,7 @@ impl ModelConfig {
             return Err(ModelError::config("hidden", "is 0: expected at least 1"));
         }
         if self.kind == ModelKind::Attn {
-            let heads = self.attention_heads();
-            if heads == 0 || self.hidden % heads != 0 {
-                return Err(ModelError::config(
-                    "heads",
-                    format!("is {heads}: expected a divisor of hidden ({})", self.hidden),
-                ));
-            }
+            check_heads(self.attention_heads(), self.hidden)?;
         }
         if !(0.0..1.0).contains(&self.sigma_floor) {
             return Err(ModelError::config(
@@ -110,13 +104,25 @@ impl ModelConfig {
         }
         Ok(())
     }
+
+    /// Heads of the attentive model's attention: `heads`, [`ATTENTION_HEADS`] by default.
+    pub fn attention_heads(&self) -> usize {
+        self.heads.unwrap_or(ATTENTION_HEADS)
+    }
 }
 
-impl ModelConfig {
-    /// Heads of the attentive model's attention: `heads`, 8 by default.
-    pub fn attention_heads(&self) -> usize {
-        self.heads.unwrap_or(8)
+/// The attentive model's default number of attention heads.
+pub const ATTENTION_HEADS: usize = 8;
+
+/// Attention splits the H features evenly over the heads.
+pub(super) fn check_heads(heads: usize, hidden: usize) -> Result<(), ModelError> {
+    if heads == 0 || hidden % heads != 0 {
+        return Err(ModelError::config(
+            "heads",
+            format!("is {heads}: expected a divisor of hidden ({hidden})"),
+        ));
     }
+    Ok(())
 }
 
 /// Filters of the image encoder's conv blocks for frames of `image_size` (the original

@@ -3,7 +3,7 @@ use burn::module::Module;
 use burn::nn::attention::{MhaInput, MultiHeadAttention, MultiHeadAttentionConfig};
 use burn::tensor::{Device, Tensor};
 
-use super::config::{decoder_filters, encoder_filters};
+use super::config::{check_heads, decoder_filters, encoder_filters, ATTENTION_HEADS};
 use super::context_projection::{ContextProjection, ContextProjectionConfig};
 use super::decoder::{Decoder, DecoderConfig};
 use super::dmbn_pte::pte_context_encodings;
@@ -23,7 +23,7 @@ pub struct DmbnAttnConfig {
     #[config(default = 128)]
     pub hidden: usize,
     /// Attention heads (H must be a multiple).
-    #[config(default = 8)]
+    #[config(default = "ATTENTION_HEADS")]
     pub heads: usize,
     /// Lower bound of every predicted σ.
     #[config(default = 0.01)]
@@ -64,15 +64,7 @@ impl DmbnAttnConfig {
     /// Builds the network; fails on an unsupported image size or a head count that does not
     /// divide H.
     pub fn init(&self, device: &Device) -> Result<DmbnAttn, ModelError> {
-        if self.heads == 0 || self.hidden % self.heads != 0 {
-            return Err(ModelError::config(
-                "heads",
-                format!(
-                    "is {}: expected a divisor of hidden ({})",
-                    self.heads, self.hidden
-                ),
-            ));
-        }
+        check_heads(self.heads, self.hidden)?;
         let projection = ContextProjectionConfig::new().with_hidden(self.hidden);
         let attention = MultiHeadAttentionConfig::new(self.hidden, self.heads).with_dropout(0.0);
         Ok(DmbnAttn {

@@ -30,3 +30,21 @@ pub fn asset(path: &str) -> PathBuf {
         .join("assets")
         .join(path)
 }
+
+/// Writes a dataset of simulated episodes at `root`: for every id and action, the episode of
+/// seed `seed + id` at 64×64.
+pub fn simulated_dataset(
+    root: &Path,
+    ids: impl IntoIterator<Item = u32>,
+    actions: &[dmbn::sim::Action],
+    seed: u64,
+) {
+    let mut writer = dmbn::data::DatasetWriter::create(root).unwrap();
+    for id in ids {
+        for &action in actions {
+            let episode = dmbn::sim::episode(action, seed + id as u64, 64).unwrap();
+            writer.write(id, action.name(), &episode).unwrap();
+        }
+    }
+    writer.finish().unwrap();
+}

@@ -116,6 +116,23 @@ pub(crate) enum CliError {
     Usage(String),
 }
 
+/// An id range `A-B` (inclusive) or a single id (`--ids`, `--mean-ids`, `--test-ids`).
+pub(crate) fn parse_ids(s: &str) -> Result<(u32, u32), String> {
+    let bad = || format!("{s:?} is not an id range A-B: expected e.g. 32-39 (or one id, 38)");
+    let id = |v: &str| v.trim().parse::<u32>().map_err(|_| bad());
+    let (a, b) = match s.split_once('-') {
+        Some((a, b)) => (id(a)?, id(b)?),
+        None => {
+            let a = id(s)?;
+            (a, a)
+        }
+    };
+    if a > b {
+        return Err(format!("{s:?}: A ({a}) must not exceed B ({b})"));
+    }
+    Ok((a, b))
+}
+
 pub(crate) fn parse_image_size(s: &str) -> Result<u32, String> {
     match s.parse::<u32>() {
         Ok(n @ (64 | 128)) => Ok(n),

@@ -17,7 +17,7 @@ use dmbn::model::ModelKind;
 use dmbn::predict::{Predictor, Scores};
 use dmbn::train::Split;
 
-use crate::cli::CliError;
+use crate::cli::{parse_ids, CliError};
 use crate::predict::{create_dir, load, parse_blend, parse_sequence, write, write_json};
 
 #[derive(Args)]
@@ -136,7 +136,7 @@ pub struct ProbeArgs {
     test_fraction: f64,
     /// Test on the ids A to B (inclusive) of --data, e.g. 32-39 (or one id, 38); the heads are
     /// fitted on all its other ids: the paper's protocol (training ids vs held-out ids).
-    #[arg(long, value_name = "A-B", value_parser = parse_id_range,
+    #[arg(long, value_name = "A-B", value_parser = parse_ids,
           conflicts_with_all = ["test_data", "test_fraction"])]
     test_ids: Option<(u32, u32)>,
     /// Test on every sequence of this second dataset; the heads are fitted on all of --data.
@@ -157,22 +157,6 @@ fn parse_fraction(s: &str) -> Result<f64, String> {
             "{s:?}: expected a fraction strictly between 0 and 1 (e.g. 0.2)"
         )),
     }
-}
-
-fn parse_id_range(s: &str) -> Result<(u32, u32), String> {
-    let bad = || format!("{s:?} is not an id range A-B: expected e.g. 32-39 (or one id, 38)");
-    let id = |v: &str| v.trim().parse::<u32>().map_err(|_| bad());
-    let (a, b) = match s.split_once('-') {
-        Some((a, b)) => (id(a)?, id(b)?),
-        None => {
-            let a = id(s)?;
-            (a, a)
-        }
-    };
-    if a > b {
-        return Err(format!("{s:?}: A ({a}) must not exceed B ({b})"));
-    }
-    Ok((a, b))
 }
 
 /// `0-7, 9, 12-13`: ids, runs shortened.

@@ -9,7 +9,7 @@ use dmbn::data::{Dataset, Sequence};
 use dmbn::predict::Predictor;
 use dmbn::quality::{score_sequence, Accumulator, MeanMotion, QualityReport, QualityRow, Scenario};
 
-use crate::cli::{progress, CliError};
+use crate::cli::{parse_ids, progress, CliError};
 use crate::predict::{parse_blend, write_json};
 
 #[derive(Clone, Copy, PartialEq, ValueEnum)]
@@ -50,20 +50,6 @@ pub struct ScoreArgs {
     /// Write the reports as JSON here (a list, one per scenario).
     #[arg(long)]
     json: Option<PathBuf>,
-}
-
-/// `A-B` (inclusive) or a single id.
-pub(crate) fn parse_ids(s: &str) -> Result<(u32, u32), String> {
-    let bad = || format!("{s:?} is not an id range: expected A-B (e.g. 180-199) or one id");
-    let (a, b) = s.split_once('-').unwrap_or((s, s));
-    let (a, b): (u32, u32) = (
-        a.trim().parse().map_err(|_| bad())?,
-        b.trim().parse().map_err(|_| bad())?,
-    );
-    if a > b {
-        return Err(format!("{s:?}: the first id must not be above the last"));
-    }
-    Ok((a, b))
 }
 
 pub fn run(args: ScoreArgs) -> Result<(), CliError> {
