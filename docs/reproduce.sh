@@ -1,14 +1,14 @@
 #!/usr/bin/env bash
 # Re-run the experiments of docs/results.md: the time-regression probe (Table 1) and the t/p/f
-# evaluations on the held-out sequences, for DMBN, DMBN-PTE and DMBN-PTE trained with
-# time-warp augmentation.
+# evaluations on the held-out sequences, for DMBN, DMBN-PTE, DMBN-PTE trained with
+# time-warp augmentation and (t/p/f, simulator) the attentive model.
 #
 #   bash docs/reproduce.sh 2020 PATH/TO/data2020   # the original DMBN data (ids 0-39)
-#   bash docs/reproduce.sh sim  PATH/TO/sim200     # `dmbn simulate --out PATH --sequences 200 --seed 1000`
+#   bash docs/reproduce.sh sim  PATH/TO/sim1000    # `dmbn simulate --out PATH --sequences 1000 --seed 1000`
 #
-# By default it uses the shipped weights (assets/models/{dmbn,pte,pte-aug}-{2020,sim}.dmbn).
-# With TRAIN=1 it first trains the three models into $OUT/runs (hours on 2 cores) and uses
-# those. Results go to $OUT (default out/results-<set>): probe-*/probe.md, eval/<model>/<mode>/
+# By default it uses the shipped weights (assets/models/{dmbn,pte,pte-aug,attn}-{2020,sim}.dmbn,
+# those that exist). With TRAIN=1 it first trains them into $OUT/runs with the README's recipe
+# (hours on 2 cores) and uses those. Results go to $OUT (default out/results-<set>): probe-*/probe.md, eval/<model>/<mode>/
 # <id>-<action>/{figure.png,eval.json} and tpf.md, the mean scores per model and mode.
 set -euo pipefail
 
@@ -20,10 +20,10 @@ export CARGO_TARGET_DIR=${CARGO_TARGET_DIR:-$HOME/.cache/dmbn/target}
 
 case $set_name in
   # The paper holds out 10 of 50 ids; ids 40-49 are not public, so 32-39 (20%) are held out.
-  2020) fraction=0.2; steps=3000; every=200; held=$(seq 32 39) ;;
-  # The simulator's 200 ids (seeds 1000-1199): the last 10% (180-199) are held out, as in
+  2020) fraction=0.2; steps=3000; every=250; held=$(seq 32 39) ;;
+  # The simulator's 1,000 ids (seeds 1000-1999): the last 10% (900-999) are held out, as in
   # training; the t/p/f evaluations use the last 10 of them.
-  sim) fraction=0.1; steps=6000; every=500; held=$(seq 190 199) ;;
+  sim) fraction=0.1; steps=4000; every=250; held=$(seq 990 999) ;;
   *) echo "error: the first argument is 2020 or sim, not '$set_name'" >&2; exit 2 ;;
 esac
 if [ ! -d "$data" ]; then
@@ -35,10 +35,13 @@ cargo build --release --quiet --bin train --bin dmbn
 bin=$CARGO_TARGET_DIR/release
 mkdir -p "$out"
 
-models=(dmbn pte pte-aug)
+models=()
 declare -A file
-for m in "${models[@]}"; do
-  file[$m]=$root/assets/models/$m-$set_name.dmbn
+for m in dmbn pte pte-aug attn; do
+  if [ "${TRAIN:-0}" = 1 ] || [ -f "$root/assets/models/$m-$set_name.dmbn" ]; then
+    models+=("$m")
+    file[$m]=$root/assets/models/$m-$set_name.dmbn
+  fi
 done
 
 if [ "${TRAIN:-0}" = 1 ]; then
@@ -46,11 +49,13 @@ if [ "${TRAIN:-0}" = 1 ]; then
     kind=${m%-aug}
     extra=()
     [ "$m" = pte-aug ] && extra=(--augment)
+    [ "$m" = attn ] && extra=(--single-modality 0.3)
     # --resume continues an interrupted run; a finished one is left as it is.
     resume=()
     [ -f "$out/runs/$m/checkpoint/state.json" ] && resume=(--resume)
     "$bin/train" --data "$data" --model "$kind" "${extra[@]}" --out "$out/runs/$m" \
-      --steps "$steps" --seed 1 --lr 3e-4 --schedule cosine --val-every "$every" \
+      --steps "$steps" --seed 1 --lr 1e-3 --schedule cosine --joint-weight 1 \
+      --contexts-in-targets --targets-per-sequence 8 --joint-targets 32 --val-every "$every" \
       --checkpoint-every "$every" --val-fraction "$fraction" --half "${resume[@]}"
     file[$m]=$out/runs/$m/model.dmbn
   done

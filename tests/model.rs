@@ -155,6 +155,49 @@ fn encode_then_decode_equals_forward_and_targets_are_independent() {
     }
 }
 
+/// An attentive model starts from the observations interpolated to the target times: at an
+/// observed step it returns the observed joints (its correction vanishes there, trained or
+/// not) and, fresh, 0.95 of the observed frame (its image gate starts nearly open); a
+/// modality the blend leaves out contributes nothing.
+#[test]
+fn a_fresh_attentive_model_goes_through_its_observations_and_only_the_observed_ones() {
+    let device = device();
+    let model = model(ModelKind::Attn, 64, &device);
+    let mut b = batch(1, 3, 3, 64, 4);
+    b.context_times = vec![0.1, 0.5, 0.9];
+    b.target_times = b.context_times.clone();
+    let predict = |b: &Batch, blend: f32| {
+        let mut b = b.clone();
+        b.blend = vec![blend];
+        let p = model.forward(&tensors(&b, &device).unwrap()).unwrap();
+        (values(&p.image_mean), values(&p.joint_mean))
+    };
+    let rms = |a: &[f32], b: &[f32]| {
+        assert_eq!(a.len(), b.len());
+        let sum: f32 = a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum();
+        (sum / a.len() as f32).sqrt()
+    };
+    let (frames, joints) = (&b.context_images, &b.context_joints);
+    // Frames only: the frames are copied, the joints are not.
+    let (image_1, joints_1) = predict(&b, 1.0);
+    // Joints only: the joints are, the frames are not (and do not matter).
+    let (image_0, joints_0) = predict(&b, 0.0);
+    // Both.
+    let (image, joints_half) = predict(&b, 0.5);
+    for observed in [&image, &image_1] {
+        assert!(rms(observed, frames) < 0.05, "{}", rms(observed, frames));
+    }
+    assert!(rms(&image_0, frames) > 0.2, "{}", rms(&image_0, frames));
+    // At an observed step the joint correction vanishes: the observed joints exactly.
+    for observed in [&joints_half, &joints_0] {
+        assert!(rms(observed, joints) < 1e-6, "{}", rms(observed, joints));
+    }
+    assert!(rms(&joints_1, joints) > 0.1, "{}", rms(&joints_1, joints));
+    let mut other = b.clone();
+    other.context_images.iter_mut().for_each(|v| *v = 1.0 - *v);
+    assert_eq!(predict(&other, 0.0).0, image_0);
+}
+
 #[test]
 fn padding_slots_do_not_matter() {
     let device = device();

@@ -38,6 +38,27 @@ fn shipped_weights_reproduce_the_golden_prediction() {
     );
 }
 
+/// Every way to make a predictor freezes its kernels (the page and `dmbn predict` load from
+/// bytes or a file: before, only `Predictor::new` froze, and loaded models compared all their
+/// weights on every call).
+#[test]
+fn every_predictor_has_frozen_kernels() {
+    let from_bytes = Predictor::from_bytes(golden::MODEL).unwrap();
+    assert!(from_bytes.model().kernels_frozen());
+    let tmp = tempfile::tempdir().unwrap();
+    let path = tmp.path().join("model.dmbn");
+    std::fs::write(&path, golden::MODEL).unwrap();
+    assert!(Predictor::load(&path).unwrap().model().kernels_frozen());
+    let expecting = Predictor::from_bytes_expecting(golden::MODEL, None, Some(64)).unwrap();
+    assert!(expecting.model().kernels_frozen());
+    let device = Device::flex();
+    let model = ModelConfig::new(ModelKind::Pte).init(&device).unwrap();
+    assert!(!model.kernels_frozen());
+    assert!(Predictor::new(model, Normalization::identity())
+        .model()
+        .kernels_frozen());
+}
+
 #[test]
 fn encoding_once_and_decoding_in_chunks_equals_one_call() {
     let predictor = Predictor::from_bytes(golden::MODEL).unwrap();

@@ -23,6 +23,10 @@ pub struct SamplerConfig {
     /// Joint-only targets per sequence, drawn uniformly from all its steps (see
     /// [`JointTargets`]); 0 for none.
     pub joint_targets: usize,
+    /// Fraction of sequences observed through one modality only: c = 1 (frames) or c = 0
+    /// (joints), half each; the rest draw c ~ U(0, 1). What the page's "images only" and
+    /// "joints only" settings need a model to have seen; 0 keeps the paper's c ~ U(0, 1).
+    pub single_modality: f32,
     /// Time-warp every drawn sequence first (the paper's augmentation), or not.
     pub warp: Option<TimeWarpConfig>,
 }
@@ -40,7 +44,8 @@ impl Sampler {
     }
 
     /// A batch of `config.batch` sequences picked uniformly from `pool`, with random context
-    /// counts, steps and blending coefficients c ~ U(0, 1).
+    /// counts, steps and blending coefficients (c ~ U(0, 1), or one modality alone for a
+    /// `single_modality` fraction).
     pub fn sample(&self, pool: &[Sequence], norm: &Normalization, rng: &mut Pcg64) -> Batch {
         self.sample_with_joints(pool, norm, rng).0
     }
@@ -97,7 +102,16 @@ impl Sampler {
                     .collect()
             };
             fill(&mut batch, b, seq, contexts, &targets, norm);
-            batch.blend[b] = rng.random_range(0.0f32..=1.0);
+            batch.blend[b] =
+                if cfg.single_modality > 0.0 && rng.random::<f32>() < cfg.single_modality {
+                    if rng.random_bool(0.5) {
+                        1.0
+                    } else {
+                        0.0
+                    }
+                } else {
+                    rng.random_range(0.0f32..=1.0)
+                };
             let times = if cfg.joint_targets > 0 {
                 seq.times()
             } else {
@@ -208,6 +222,7 @@ mod tests {
             targets: 4,
             contexts_in_targets: false,
             joint_targets: 0,
+            single_modality: 0.0,
             warp: None,
         });
         let mut rng = Pcg64::seed_from_u64(1);
@@ -247,6 +262,7 @@ mod tests {
             targets: 8,
             contexts_in_targets: true,
             joint_targets: 0,
+            single_modality: 0.0,
             warp: None,
         });
         let batch = sampler.sample(
@@ -285,5 +301,29 @@ mod tests {
         assert_eq!(batch.context_images[8], 14.0 / 255.0);
         assert_eq!(batch.target_times, vec![0.0, 1.0]);
         assert_eq!(batch.context_times, vec![0.5]);
+    }
+
+    #[test]
+    fn single_modality_draws_c_of_0_and_1() {
+        let pool = vec![seq(20)];
+        let sampler = Sampler::new(SamplerConfig {
+            batch: 400,
+            max_contexts: 3,
+            targets: 2,
+            contexts_in_targets: true,
+            joint_targets: 0,
+            single_modality: 0.5,
+            warp: None,
+        });
+        let batch = sampler.sample(
+            &pool,
+            &Normalization::identity(),
+            &mut Pcg64::seed_from_u64(3),
+        );
+        let count = |c: f32| batch.blend.iter().filter(|&&v| v == c).count();
+        // About 100 each of c = 0 and c = 1, the other ~200 strictly inside.
+        assert!((60..140).contains(&count(0.0)), "{}", count(0.0));
+        assert!((60..140).contains(&count(1.0)), "{}", count(1.0));
+        assert!(batch.blend.iter().all(|c| (0.0..=1.0).contains(c)));
     }
 }

@@ -6,7 +6,7 @@ use burn::tensor::{Device, Tensor};
 
 use super::image_decoder::{ImageDecoder, ImageDecoderConfig};
 use super::joint_decoder::{JointDecoder, JointDecoderConfig};
-use super::Prediction;
+use super::{Prediction, Start};
 
 /// Configuration of a [`Decoder`].
 #[derive(Config, Debug)]
@@ -21,6 +21,9 @@ pub struct DecoderConfig {
     /// Lower bound of every predicted σ.
     #[config(default = 0.01)]
     pub sigma_floor: f64,
+    /// A gated image decoder (see [`ImageDecoder`]): the attentive model's.
+    #[config(default = false)]
+    pub gated: bool,
 }
 
 /// Both decoders behind their shared Dense 1024 + ReLU layer: one target's conditioned
@@ -43,6 +46,7 @@ impl DecoderConfig {
             image: ImageDecoderConfig::new(self.image_filters.clone())
                 .with_input(self.shared)
                 .with_sigma_floor(self.sigma_floor)
+                .with_gated(self.gated)
                 .init(device),
             joint: JointDecoderConfig::new()
                 .with_input(self.shared)
@@ -53,12 +57,17 @@ impl DecoderConfig {
 }
 
 impl Decoder {
-    /// `[B, M, input]` conditioned representations to the prediction for every target.
-    pub fn forward(&self, x: Tensor<3>) -> Prediction {
+    /// `[B, M, input]` conditioned representations to the prediction for every target; the
+    /// means start from `start` where given (the attentive model).
+    pub fn forward(&self, x: Tensor<3>, start: Option<Start>) -> Prediction {
         let [b, m, _] = x.dims();
         let x = self.shared_layer(x);
-        let (image_mean, image_sigma) = self.image.forward(x.clone());
-        let (joint_mean, joint_sigma) = self.joint.forward(x);
+        let (image_start, joint_start) = match start {
+            Some(Start { image, joint }) => (Some(image), Some(joint)),
+            None => (None, None),
+        };
+        let (image_mean, image_sigma) = self.image.forward(x.clone(), image_start);
+        let (joint_mean, joint_sigma) = self.joint.forward(x, joint_start);
         let [_, c, h, w] = image_mean.dims();
         Prediction {
             image_mean: image_mean.reshape([b, m, c, h, w]),
@@ -69,9 +78,11 @@ impl Decoder {
     }
 
     /// Only the joints: `[B, M, input]` to their mean and σ, `[B, M, 7]` each.
-    pub fn joints(&self, x: Tensor<3>) -> (Tensor<3>, Tensor<3>) {
+    pub fn joints(&self, x: Tensor<3>, start: Option<Start>) -> (Tensor<3>, Tensor<3>) {
         let [b, m, _] = x.dims();
-        let (mean, sigma) = self.joint.forward(self.shared_layer(x));
+        let (mean, sigma) = self
+            .joint
+            .forward(self.shared_layer(x), start.map(|s| s.joint));
         (mean.reshape([b, m, 7]), sigma.reshape([b, m, 7]))
     }
 

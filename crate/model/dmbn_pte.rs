@@ -96,7 +96,7 @@ impl DmbnPte {
     /// Encode the contexts and decode the batch's target times.
     pub fn forward(&self, batch: &BatchTensors) -> Prediction {
         let x = self.condition(&self.encode(batch), batch.target_times.clone());
-        self.decoder.forward(x)
+        self.decoder.forward(x, None)
     }
 }
 

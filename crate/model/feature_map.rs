@@ -176,6 +176,11 @@ impl KernelCache {
         self.frozen.store(true, Ordering::Relaxed);
     }
 
+    /// Whether [`KernelCache::freeze`] was called.
+    pub fn is_frozen(&self) -> bool {
+        self.frozen.load(Ordering::Relaxed)
+    }
+
     /// The kernels of `convs` in `slot`, prepared now if the slot is empty or holds others.
     pub fn get(
         &self,

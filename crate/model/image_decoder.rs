@@ -1,5 +1,5 @@
 use burn::config::Config;
-use burn::module::Module;
+use burn::module::{Module, Param};
 use burn::nn::conv::Conv2d;
 use burn::tensor::activation::sigmoid;
 use burn::tensor::{Device, Tensor};
@@ -8,6 +8,11 @@ use burn::tensor::{Device, Tensor};
 use super::feature_map::is_tracked;
 use super::feature_map::{new_conv3x3, Activation, FeatureMap, KernelCache};
 use super::gaussian::bounded_sigma;
+use super::FrameStart;
+
+/// The gate head's starting bias: g = σ(3) ≈ 0.95, a fresh gated decoder nearly copies the
+/// frames it starts from.
+const GATE_BIAS: f32 = 3.0;
 
 /// Filters of the two convolutions between the last upsampling block and the heads.
 pub const IMAGE_DECODER_TAIL: [usize; 2] = [16, 8];
@@ -23,11 +28,17 @@ pub struct ImageDecoderConfig {
     /// Lower bound of the predicted σ.
     #[config(default = 0.01)]
     pub sigma_floor: f64,
+    /// With a gate head (the attentive model): the mean mixes its own frame with the frame
+    /// it is given to start from, pixel by pixel.
+    #[config(default = false)]
+    pub gated: bool,
 }
 
 /// The image decoder: reshape to 2x2, blocks of Conv 3x3 + ReLU + nearest UpSampling x2,
 /// Conv 16 + ReLU, Conv 8 + ReLU, then two 3-channel 3x3 heads: the mean (through a sigmoid,
-/// since pixels lie in [0, 1]) and σ (see [`bounded_sigma`]).
+/// since pixels lie in [0, 1]) and σ (see [`bounded_sigma`]); gated, a 1-channel gate head g
+/// too, and the mean is g·start + (1 − g)·its own (g = 0 where the start is not observed):
+/// copy what stays as observed, draw what moved.
 #[derive(Module, Debug)]
 pub struct ImageDecoder {
     /// One 3x3 convolution per upsampling block.
@@ -38,6 +49,8 @@ pub struct ImageDecoder {
     pub mean: Conv2d,
     /// 3-channel σ head.
     pub sigma: Conv2d,
+    /// 1-channel gate head of a gated decoder.
+    pub gate: Option<Conv2d>,
     /// Lower bound of σ.
     pub sigma_floor: f64,
     /// The inference kernels prepared from the convolutions above.
@@ -66,6 +79,12 @@ impl ImageDecoderConfig {
             tail,
             mean: new_conv3x3([channels, 3], device),
             sigma: new_conv3x3([channels, 3], device),
+            gate: self.gated.then(|| {
+                let mut gate = new_conv3x3([channels, 1], device);
+                gate.weight = gate.weight.map(|w| w.zeros_like());
+                gate.bias = Some(Param::from_tensor(Tensor::full([1], GATE_BIAS, device)));
+                gate
+            }),
             sigma_floor: self.sigma_floor,
             kernels: KernelCache::default(),
         }
@@ -77,16 +96,17 @@ impl ImageDecoder {
     /// through the differentiable operations of [`conv_op`](super::conv_op) when training (see
     /// [`is_tracked`]; through burn's layers on other backends than flex), else straight through
     /// the inference kernels ([`FeatureMap`]). Both of ours fold each upsampling into the
-    /// convolution that reads it.
-    pub fn forward(&self, x: Tensor<2>) -> (Tensor<4>, Tensor<4>) {
+    /// convolution that reads it. A gated decoder mixes its mean with `start` (the attentive
+    /// model's interpolated observations).
+    pub fn forward(&self, x: Tensor<2>, start: Option<FrameStart>) -> (Tensor<4>, Tensor<4>) {
         #[cfg(not(target_arch = "wasm32"))]
         if is_tracked(&x) || is_tracked(&self.mean.weight.val()) {
-            let (mean, sigma) = if super::conv_op::supported(&x) {
+            let raw = if super::conv_op::supported(&x) {
                 self.forward_tracked(x)
             } else {
                 self.forward_burn(x)
             };
-            return self.heads(mean, sigma);
+            return self.heads(raw, start);
         }
         let [k, width] = x.dims();
         let device = x.device();
@@ -98,13 +118,28 @@ impl ImageDecoder {
                 .get(i, &[conv], map.shape[3], self.upsampled(i));
             map = map.conv3x3(&kernels, Activation::Relu);
         }
-        // Both heads in one product.
-        let heads = [&self.mean, &self.sigma];
+        // All heads in one product.
+        let heads = self.head_convs();
         let kernels = self.kernels.get(layers, &heads, map.shape[3], false);
-        let heads = map.conv3x3(&kernels, Activation::Identity);
-        let mut heads = heads.into_channels_first(&[3, 3], &device).into_iter();
-        let (mean, sigma) = (heads.next().expect("mean"), heads.next().expect("σ"));
-        self.heads(mean, sigma)
+        let raw = map.conv3x3(&kernels, Activation::Identity);
+        let raw = raw.into_channels_first(&self.head_channels(), &device);
+        self.heads(raw, start)
+    }
+
+    /// The heads, in the order of their raw outputs: mean, σ, gate.
+    fn head_convs(&self) -> Vec<&Conv2d> {
+        [&self.mean, &self.sigma]
+            .into_iter()
+            .chain(&self.gate)
+            .collect()
+    }
+
+    /// Channels of each head.
+    fn head_channels(&self) -> Vec<usize> {
+        [3, 3]
+            .into_iter()
+            .chain(self.gate.as_ref().map(|_| 1))
+            .collect()
     }
 
     /// Whether the convolution of layer `i` (blocks, then tail) reads its input upsampled: every
@@ -114,30 +149,35 @@ impl ImageDecoder {
     }
 
     /// The layers as differentiable operations: `[K, input]` to the heads' raw outputs, each
-    /// `[K, 3, S, S]`.
+    /// `[K, channels, S, S]`.
     #[cfg(not(target_arch = "wasm32"))]
-    fn forward_tracked(&self, x: Tensor<2>) -> (Tensor<4>, Tensor<4>) {
+    fn forward_tracked(&self, x: Tensor<2>) -> Vec<Tensor<4>> {
         use super::conv_op::{bias, channels_first, conv3x3, conv3x3_weights};
         let [k, width] = x.dims();
         let mut x = x.reshape([k, width / 4, 2, 2]).permute([0, 2, 3, 1]);
         for (i, conv) in self.blocks.iter().chain(&self.tail).enumerate() {
             x = conv3x3(x, conv, self.upsampled(i), Activation::Relu);
         }
-        // Both heads in one convolution.
-        let weight = Tensor::cat(vec![self.mean.weight.val(), self.sigma.weight.val()], 0);
-        let bias = Tensor::cat(vec![bias(&self.mean), bias(&self.sigma)], 0);
+        // All heads in one convolution.
+        let convs = self.head_convs();
+        let weight = Tensor::cat(convs.iter().map(|c| c.weight.val()).collect(), 0);
+        let bias = Tensor::cat(convs.iter().map(|c| bias(c)).collect(), 0);
         let heads = conv3x3_weights(x, weight, bias, false, Activation::Identity);
-        (
-            channels_first(heads.clone(), 0..3),
-            channels_first(heads, 3..6),
-        )
+        let mut first = 0;
+        self.head_channels()
+            .into_iter()
+            .map(|c| {
+                first += c;
+                channels_first(heads.clone(), first - c..first)
+            })
+            .collect()
     }
 
     /// The layers through burn's own operations (upsampling in full), for training on backends
     /// other than flex (the `cuda` feature), and what tests compare the other paths with:
     /// `[K, input]` to the heads' raw outputs.
     #[cfg(not(target_arch = "wasm32"))]
-    fn forward_burn(&self, x: Tensor<2>) -> (Tensor<4>, Tensor<4>) {
+    fn forward_burn(&self, x: Tensor<2>) -> Vec<Tensor<4>> {
         use burn::tensor::activation::relu;
         let [k, width] = x.dims();
         let mut x = x.reshape([k, width / 4, 2, 2]);
@@ -147,12 +187,26 @@ impl ImageDecoder {
         for conv in &self.tail {
             x = relu(conv.forward(x));
         }
-        (self.mean.forward(x.clone()), self.sigma.forward(x))
+        self.head_convs()
+            .into_iter()
+            .map(|conv| conv.forward(x.clone()))
+            .collect()
     }
 
-    /// The heads' raw outputs to the mean (sigmoid) and σ frames.
-    fn heads(&self, mean: Tensor<4>, sigma: Tensor<4>) -> (Tensor<4>, Tensor<4>) {
-        (sigmoid(mean), bounded_sigma(sigma, self.sigma_floor))
+    /// The heads' raw outputs to the mean (sigmoid, mixed with the start by a gated decoder)
+    /// and σ frames. A start without a gate, or a gate without a start, leaves the mean alone.
+    fn heads(&self, raw: Vec<Tensor<4>>, start: Option<FrameStart>) -> (Tensor<4>, Tensor<4>) {
+        let mut raw = raw.into_iter();
+        let mean = sigmoid(raw.next().expect("the mean head"));
+        let sigma = bounded_sigma(raw.next().expect("the σ head"), self.sigma_floor);
+        let mean = match (raw.next(), start) {
+            (Some(gate), Some(start)) => {
+                let g = sigmoid(gate) * start.observed;
+                start.frames * g.clone() + mean * g.neg().add_scalar(1.0)
+            }
+            _ => mean,
+        };
+        (mean, sigma)
     }
 }
 
@@ -194,8 +248,7 @@ mod tests {
 
     /// The decoder through burn's own layers: what both paths must equal.
     fn reference(decoder: &ImageDecoder, x: Tensor<2>) -> (Tensor<4>, Tensor<4>) {
-        let (mean, sigma) = decoder.forward_burn(x);
-        decoder.heads(mean, sigma)
+        decoder.heads(decoder.forward_burn(x), None)
     }
 
     #[test]
@@ -204,10 +257,42 @@ mod tests {
         let decoder = decoder(&device);
         let x = Tensor::<2>::random([3, 64], Distribution::Normal(0.0, 1.0), &device);
         let (mean, sigma) = reference(&decoder, x.clone());
-        let (fast_mean, fast_sigma) = decoder.forward(x);
+        let (fast_mean, fast_sigma) = decoder.forward(x, None);
         assert_eq!(mean.dims(), [3, 3, 16, 16]);
         assert!(diff(mean, fast_mean) < 1e-5);
         assert!(diff(sigma, fast_sigma) < 1e-5);
+    }
+
+    #[test]
+    fn gated_paths_equal_burns_layers_and_the_gate_mixes_the_start() {
+        for device in [Device::flex(), Device::flex().autodiff()] {
+            device.seed(6);
+            let mut decoder = ImageDecoderConfig::new(vec![16, 8, 8])
+                .with_input(64)
+                .with_gated(true)
+                .init(&device);
+            // A gate that varies from pixel to pixel.
+            let gate = decoder.gate.take().unwrap();
+            decoder.gate = Some(Conv2d {
+                weight: gate
+                    .weight
+                    .map(|w| w.random_like(Distribution::Normal(0.0, 1.0))),
+                ..gate
+            });
+            let x = Tensor::<2>::random([2, 64], Distribution::Normal(0.0, 1.0), &device);
+            let start = FrameStart {
+                frames: Tensor::random([2, 3, 16, 16], Distribution::Default, &device),
+                observed: Tensor::<1>::from_floats([1.0, 0.0], &device).reshape([2, 1, 1, 1]),
+            };
+            let (want, _) = decoder.heads(decoder.forward_burn(x.clone()), Some(start.clone()));
+            let (got, _) = decoder.forward(x.clone(), Some(start));
+            assert!(diff(want.clone(), got) < 1e-5);
+            // The unobserved target ignores the start; the observed one does not.
+            let (alone, _) = decoder.forward(x, None);
+            let row = |t: Tensor<4>, i: usize| t.narrow(0, i, 1);
+            assert!(diff(row(want.clone(), 1), row(alone.clone(), 1)) < 1e-6);
+            assert!(diff(row(want, 0), row(alone, 0)) > 0.01);
+        }
     }
 
     #[test]
@@ -218,7 +303,7 @@ mod tests {
         let decoder = decoder(&device);
         let x = Tensor::<2>::random([2, 64], Distribution::Normal(0.0, 1.0), &device);
         assert!(!super::super::conv_op::supported(&x));
-        let (mean, sigma) = decoder.forward(x.clone());
+        let (mean, sigma) = decoder.forward(x.clone(), None);
         let (ref_mean, ref_sigma) = reference(&decoder, x);
         assert!(diff(mean.clone().inner(), ref_mean.inner()) < 1e-6);
         assert!(diff(sigma.inner(), ref_sigma.inner()) < 1e-6);
@@ -232,7 +317,7 @@ mod tests {
         let decoder = decoder(&device);
         let x =
             Tensor::<2>::random([2, 64], Distribution::Normal(0.0, 1.0), &device).require_grad();
-        let (mean, sigma) = decoder.forward(x.clone());
+        let (mean, sigma) = decoder.forward(x.clone(), None);
         let (ref_mean, ref_sigma) = reference(&decoder, x.clone());
         assert!(diff(mean.clone().inner(), ref_mean.clone().inner()) < 1e-5);
         assert!(diff(sigma.clone().inner(), ref_sigma.clone().inner()) < 1e-5);

@@ -5,6 +5,7 @@ use burn::tensor::activation::relu;
 use burn::tensor::{Device, Tensor};
 
 use super::gaussian::bounded_sigma;
+use super::JointStart;
 
 /// Widths of the joint decoder's hidden layers (the original DMBN's).
 pub const JOINT_DECODER_LAYERS: [usize; 4] = [512, 216, 128, 32];
@@ -56,13 +57,18 @@ impl JointDecoderConfig {
 }
 
 impl JointDecoder {
-    /// `[K, input]` to the mean and σ joints, each `[K, 7]`.
-    pub fn forward(&self, x: Tensor<2>) -> (Tensor<2>, Tensor<2>) {
+    /// `[K, input]` to the mean and σ joints, each `[K, 7]`; given a `start` (the attentive
+    /// model's interpolated observations), the mean is a scaled correction of it.
+    pub fn forward(&self, x: Tensor<2>, start: Option<JointStart>) -> (Tensor<2>, Tensor<2>) {
         let x = self
             .layers
             .iter()
             .fold(x, |x, layer| relu(layer.forward(x)));
         let mean = self.mean.forward(x.clone());
+        let mean = match start {
+            Some(start) => start.joints + mean * start.scale,
+            None => mean,
+        };
         let sigma = bounded_sigma(self.sigma.forward(x), self.sigma_floor);
         (mean, sigma)
     }

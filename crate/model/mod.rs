@@ -26,6 +26,7 @@ mod gaussian;
 mod image_decoder;
 mod image_encoder;
 mod init;
+mod interpolation;
 mod joint_decoder;
 mod joint_encoder;
 mod loss;
@@ -54,10 +55,13 @@ pub use file::{load_bytes, load_bytes_expecting, read_header, save_bytes, ModelH
 pub use gaussian::bounded_sigma;
 pub use image_decoder::{upsample2, ImageDecoder, ImageDecoderConfig};
 pub use image_encoder::{ImageEncoder, ImageEncoderConfig};
+pub use interpolation::{interpolation_tensors, linear_weights, nearest_distance};
 pub use joint_decoder::{JointDecoder, JointDecoderConfig};
 pub use joint_encoder::{JointEncoder, JointEncoderConfig};
 pub use loss::{gaussian_loss, joint_nll, Loss, LossValues};
 pub use model::{Model, Network};
-pub use prediction::{AttentiveContexts, ContextEncodings, Prediction, Representation};
+pub use prediction::{
+    AttentiveContexts, ContextEncodings, FrameStart, JointStart, Prediction, Representation, Start,
+};
 pub use time_embedding::{TimeEmbedding, TimeEmbeddingConfig};
 pub use time_projection::{TimeProjection, TimeProjectionConfig};

@@ -6,8 +6,8 @@ use super::dmbn_attn::{DmbnAttn, DmbnAttnConfig};
 use super::dmbn_pte::{DmbnPte, DmbnPteConfig};
 use super::loss::{gaussian_loss, Loss};
 use super::{
-    BatchTensors, ContextEncodings, Decoder, ModelConfig, ModelError, ModelKind, Prediction,
-    Representation,
+    BatchTensors, ContextEncodings, Decoder, ImageEncoder, ModelConfig, ModelError, ModelKind,
+    Prediction, Representation, Start,
 };
 
 /// One of the three networks.
@@ -94,13 +94,13 @@ impl Model {
     ///
     /// [`KernelCache::freeze`]: super::KernelCache::freeze
     pub fn freeze_kernels(&self) {
-        let encoder = match &self.network {
-            Network::Dmbn(n) => &n.image_encoder,
-            Network::Pte(n) => &n.image_encoder,
-            Network::Attn(n) => &n.image_encoder,
-        };
-        encoder.kernels.freeze();
+        self.image_encoder().kernels.freeze();
         self.decoder().image.kernels.freeze();
+    }
+
+    /// Whether [`Model::freeze_kernels`] was called.
+    pub fn kernels_frozen(&self) -> bool {
+        self.image_encoder().kernels.is_frozen() && self.decoder().image.kernels.is_frozen()
     }
 
     /// DMBN, DMBN-PTE or the attentive model.
@@ -142,8 +142,8 @@ impl Model {
         representation: &Representation,
         target_times: Tensor<2>,
     ) -> Result<Prediction, ModelError> {
-        let x = self.condition(representation, target_times)?;
-        Ok(self.decoder().forward(x))
+        let (x, start) = self.condition(representation, target_times)?;
+        Ok(self.decoder().forward(x, start))
     }
 
     /// Only the joints' mean and σ at `[B, M]` target times, `[B, M, 7]` each: the image
@@ -154,25 +154,28 @@ impl Model {
         representation: &Representation,
         target_times: Tensor<2>,
     ) -> Result<(Tensor<3>, Tensor<3>), ModelError> {
-        let x = self.condition(representation, target_times)?;
-        Ok(self.decoder().joints(x))
+        let (x, start) = self.condition(representation, target_times)?;
+        Ok(self.decoder().joints(x, start))
     }
 
-    /// The decoders' input at `[B, M]` target times.
+    /// The decoders' input at `[B, M]` target times, and where their means start.
     fn condition(
         &self,
         representation: &Representation,
         target_times: Tensor<2>,
-    ) -> Result<Tensor<3>, ModelError> {
+    ) -> Result<(Tensor<3>, Option<Start>), ModelError> {
         let batch = representation.batch();
         let found = target_times.dims();
         if found[0] != batch || found[1] == 0 {
             return Err(ModelError::TargetTimes { batch, found });
         }
         Ok(match (&self.network, representation) {
-            (Network::Dmbn(net), Representation::Mean(r)) => net.condition(r, target_times),
-            (Network::Pte(net), Representation::Mean(r)) => net.condition(r, target_times),
-            (Network::Attn(net), Representation::Attentive(c)) => net.condition(c, target_times),
+            (Network::Dmbn(net), Representation::Mean(r)) => (net.condition(r, target_times), None),
+            (Network::Pte(net), Representation::Mean(r)) => (net.condition(r, target_times), None),
+            (Network::Attn(net), Representation::Attentive(c)) => {
+                let (x, start) = net.condition(c, target_times);
+                (x, Some(start))
+            }
             _ => {
                 return Err(ModelError::config(
                     "representation",
@@ -183,6 +186,14 @@ impl Model {
                 ))
             }
         })
+    }
+
+    fn image_encoder(&self) -> &ImageEncoder {
+        match &self.network {
+            Network::Dmbn(n) => &n.image_encoder,
+            Network::Pte(n) => &n.image_encoder,
+            Network::Attn(n) => &n.image_encoder,
+        }
     }
 
     fn decoder(&self) -> &Decoder {

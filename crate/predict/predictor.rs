@@ -42,14 +42,11 @@ impl Predictor {
         kind: Option<ModelKind>,
         image_size: Option<usize>,
     ) -> Result<Self, ModelError> {
-        let device = Device::flex();
         let (model, normalization, _) =
-            model::load_bytes_expecting(bytes, &device, kind, image_size)?;
-        Ok(Predictor {
-            model,
-            normalization,
-            device,
-        })
+            model::load_bytes_expecting(bytes, &Device::flex(), kind, image_size)?;
+        // One constructor: the loaded weights are frozen as `new`'s are (not compared again
+        // on every call).
+        Ok(Self::new(model, normalization))
     }
 
     /// The model file at `path`.

@@ -3,7 +3,7 @@ use serde::Serialize;
 use super::accumulator::Guess;
 use super::{Accumulator, MeanMotion, Quality, Scenario};
 use crate::data::{Sequence, JOINTS};
-use crate::model::ModelError;
+use crate::model::{linear_weights, ModelError};
 use crate::predict::{Observations, Predictor};
 
 /// One sequence's sums for the model and the baselines.
@@ -107,19 +107,16 @@ fn baseline(seq: &Sequence, observed: &[usize], k: usize) -> (usize, [f32; JOINT
     let nearest = (0..observed.len())
         .min_by_key(|&i| observed[i].abs_diff(k))
         .unwrap_or(0);
-    let after = observed.iter().position(|&o| o >= k);
-    let joints = match after {
-        None => seq.joints[observed[observed.len() - 1]],
-        Some(0) => seq.joints[observed[0]],
-        Some(i) => {
-            let (a, b) = (observed[i - 1], observed[i]);
-            let w = (k - a) as f32 / (b - a) as f32;
-            std::array::from_fn(|j| {
-                let (x, y) = (seq.joints[a][j], seq.joints[b][j]);
-                x + w * (y - x)
-            })
-        }
-    };
+    // Step indices are times too: the phase is linear in them.
+    let steps: Vec<f32> = observed.iter().map(|&o| o as f32).collect();
+    let weights = linear_weights(&steps, &vec![true; steps.len()], k as f32);
+    let joints = std::array::from_fn(|j| {
+        observed
+            .iter()
+            .zip(&weights)
+            .map(|(&o, w)| w * seq.joints[o][j])
+            .sum()
+    });
     (nearest, joints)
 }
 

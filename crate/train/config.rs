@@ -57,6 +57,10 @@ pub struct TrainConfig {
     /// steps than frames are decoded for); their NLL is added with the joint weight.
     #[serde(default)]
     pub joint_targets: usize,
+    /// Fraction of training sequences observed through one modality alone (c = 0 or 1); 0
+    /// for the paper's c ~ U(0, 1) everywhere.
+    #[serde(default)]
+    pub single_modality: f32,
     /// Base learning rate (Adam).
     pub lr: f64,
     /// Learning-rate schedule.
@@ -93,6 +97,7 @@ impl TrainConfig {
             targets_per_sequence: 4,
             contexts_in_targets: false,
             joint_targets: 0,
+            single_modality: 0.0,
             lr: 1e-4,
             schedule: Schedule::Constant,
             clip_norm: 1.0,

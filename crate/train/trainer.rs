@@ -134,6 +134,7 @@ impl Trainer {
             targets: config.targets_per_sequence,
             contexts_in_targets: config.contexts_in_targets,
             joint_targets: 0,
+            single_modality: config.single_modality,
             warp: None,
         };
         // Training batches are warped with --augment; validation always sees plain sequences.
@@ -385,6 +386,12 @@ fn validate(config: &TrainConfig) -> Result<(), TrainError> {
         return Err(TrainError::config(
             "clip_norm",
             format!("{}: expected a positive number", config.clip_norm),
+        ));
+    }
+    if !(0.0..=1.0).contains(&config.single_modality) {
+        return Err(TrainError::config(
+            "single_modality",
+            format!("{}: expected a fraction in [0, 1]", config.single_modality),
         ));
     }
     if let Some(warp) = &config.augment {

@@ -63,6 +63,11 @@ struct Args {
     /// that many more steps, at a small cost (no frame is decoded for them).
     #[arg(long, default_value_t = 0)]
     joint_targets: usize,
+    /// Fraction of training sequences observed through one modality alone (blend c = 1 or 0,
+    /// half each), so that frames-only and joints-only observation are trained; the rest draw
+    /// c ~ U(0, 1).
+    #[arg(long, default_value_t = 0.0)]
+    single_modality: f32,
     /// Frame size the model works at (64 or 128; frames are resized when read).
     #[arg(long, default_value_t = 64)]
     image_size: usize,
@@ -133,6 +138,7 @@ fn run(args: Args) -> Result<(), TrainError> {
         config.targets_per_sequence = args.targets_per_sequence;
         config.contexts_in_targets = args.contexts_in_targets;
         config.joint_targets = args.joint_targets;
+        config.single_modality = args.single_modality;
         config.image_size = args.image_size;
         config.lr = args.lr;
         config.schedule = match args.schedule {
