@@ -62,10 +62,7 @@ impl Decoder {
     pub fn forward(&self, x: Tensor<3>, start: Option<Start>) -> Prediction {
         let [b, m, _] = x.dims();
         let x = self.shared_layer(x);
-        let (image_start, joint_start) = match start {
-            Some(Start { image, joint }) => (Some(image), Some(joint)),
-            None => (None, None),
-        };
+        let (image_start, joint_start) = start.map(|s| (s.frames(), s.joints())).unzip();
         let (image_mean, image_sigma) = self.image.forward(x.clone(), image_start);
         let (joint_mean, joint_sigma) = self.joint.forward(x, joint_start);
         let [_, c, h, w] = image_mean.dims();
@@ -82,7 +79,7 @@ impl Decoder {
         let [b, m, _] = x.dims();
         let (mean, sigma) = self
             .joint
-            .forward(self.shared_layer(x), start.map(|s| s.joint));
+            .forward(self.shared_layer(x), start.map(|s| s.joints()));
         (mean.reshape([b, m, 7]), sigma.reshape([b, m, 7]))
     }
 

@@ -3,19 +3,15 @@ use burn::module::{Module, Param};
 use burn::nn::attention::{MhaInput, MultiHeadAttention, MultiHeadAttentionConfig};
 use burn::tensor::{Device, Tensor};
 
-use super::config::{check_heads, decoder_filters, encoder_filters, ATTENTION_HEADS};
-use super::context_projection::{ContextProjection, ContextProjectionConfig};
+use super::config::{check_heads, decoder_filters, ATTENTION_HEADS};
+use super::context_projection::ContextProjection;
 use super::decoder::{Decoder, DecoderConfig};
-use super::dmbn_pte::pte_context_encodings;
-use super::image_encoder::{ImageEncoder, ImageEncoderConfig};
-use super::interpolation::interpolation_tensors;
-use super::joint_encoder::{JointEncoder, JointEncoderConfig};
+use super::dmbn_pte::{pte_context_encodings, pte_encoders, PteEncoders};
+use super::image_encoder::ImageEncoder;
+use super::joint_encoder::JointEncoder;
 use super::time_embedding::{TimeEmbedding, TimeEmbeddingConfig};
-use super::time_projection::{TimeProjection, TimeProjectionConfig};
-use super::{
-    AttentiveContexts, BatchTensors, ContextEncodings, FrameStart, JointStart, ModelError,
-    Prediction, Start,
-};
+use super::time_projection::TimeProjection;
+use super::{AttentiveContexts, BatchTensors, ContextEncodings, ModelError, Prediction, Start};
 
 /// Configuration of a [`DmbnAttn`].
 #[derive(Config, Debug)]
@@ -80,20 +76,20 @@ impl DmbnAttnConfig {
     /// divide H.
     pub fn init(&self, device: &Device) -> Result<DmbnAttn, ModelError> {
         check_heads(self.heads, self.hidden)?;
-        let projection = ContextProjectionConfig::new().with_hidden(self.hidden);
+        let PteEncoders {
+            image_encoder,
+            joint_encoder,
+            time,
+            image_projection,
+            joint_projection,
+        } = pte_encoders(self.image_size, self.hidden, device)?;
         let attention = MultiHeadAttentionConfig::new(self.hidden, self.heads).with_dropout(0.0);
         Ok(DmbnAttn {
-            image_encoder: ImageEncoderConfig::new(3, encoder_filters(self.image_size)?)
-                .with_hidden(self.hidden)
-                .init(device),
-            joint_encoder: JointEncoderConfig::new(7)
-                .with_hidden(self.hidden)
-                .init(device),
-            time: TimeProjectionConfig::new()
-                .with_hidden(self.hidden)
-                .init(device),
-            image_projection: projection.init(device),
-            joint_projection: projection.init(device),
+            image_encoder,
+            joint_encoder,
+            time,
+            image_projection,
+            joint_projection,
             time_embedding: TimeEmbeddingConfig::new()
                 .with_hidden(self.hidden)
                 .init(device),
@@ -125,10 +121,9 @@ impl DmbnAttn {
     /// The contexts every target attends to: their encodings, keys and padding.
     pub fn encode(&self, batch: &BatchTensors) -> AttentiveContexts {
         let encodings = self.encode_contexts(batch);
-        let [b, n, c, h, w] = batch.context_images.dims();
         AttentiveContexts {
             times: batch.context_times.clone(),
-            frames: batch.context_images.clone().reshape([b, n, c * h * w]),
+            frames: batch.context_images.clone(),
             joints: batch.context_joints.clone(),
             image: encodings.image,
             joint: encodings.joint,
@@ -156,54 +151,13 @@ impl DmbnAttn {
         let joint = attend(&self.joint_attention, &contexts.joint);
         let c = contexts.blend.clone().unsqueeze_dims::<3>(&[1, 2]);
         let r = image * c.clone() + joint * c.neg().add_scalar(1.0);
-        let [image_observed, joint_observed] = observed(&contexts.blend);
-        let gates = Tensor::stack::<2>(vec![image_observed.clone(), joint_observed.clone()], 1);
-        let embedding = gates.matmul(self.observed.val()).unsqueeze_dim::<3>(1);
-        let x = r - self.time.forward(target_times.clone()) + embedding;
-        let start = self.start(contexts, target_times, image_observed, joint_observed);
+        let start = Start::new(contexts, &target_times);
+        let embedding = start
+            .observed()
+            .matmul(self.observed.val())
+            .unsqueeze_dim::<3>(1);
+        let x = r - self.time.forward(target_times) + embedding;
         (x, start)
-    }
-
-    /// The observations interpolated to the target times, marked or zeroed where their
-    /// modality is not observed (`[B]` gates of 1 or 0).
-    fn start(
-        &self,
-        contexts: &AttentiveContexts,
-        target_times: Tensor<2>,
-        image_observed: Tensor<1>,
-        joint_observed: Tensor<1>,
-    ) -> Start {
-        let [b, m] = target_times.dims();
-        let mask = contexts.padding.clone().bool_not().float();
-        let (weights, distance) = interpolation_tensors(
-            &target_times,
-            &contexts.times,
-            &mask,
-            &target_times.device(),
-        );
-        let frames = weights.clone().matmul(contexts.frames.clone());
-        let joint_observed = joint_observed.unsqueeze_dim::<2>(1);
-        let joints =
-            weights.matmul(contexts.joints.clone()) * joint_observed.clone().unsqueeze_dim(2);
-        // 1 − e^(−d / width) where the joints are observed, else 1.
-        let scale = (distance.div_scalar(-OBSERVED_WIDTH).exp() * joint_observed)
-            .neg()
-            .add_scalar(1.0);
-        let s = ((frames.dims()[2] / 3) as f64).sqrt() as usize;
-        let observed = image_observed
-            .unsqueeze_dim::<2>(1)
-            .expand([b, m])
-            .reshape([b * m, 1, 1, 1]);
-        Start {
-            image: FrameStart {
-                frames: frames.reshape([b * m, 3, s, s]),
-                observed,
-            },
-            joint: JointStart {
-                joints: joints.reshape([b * m, 7]),
-                scale: scale.reshape([b * m, 1]),
-            },
-        }
     }
 
     /// Encode the contexts and decode the batch's target times.
@@ -212,20 +166,6 @@ impl DmbnAttn {
         self.decoder.forward(x, Some(start))
     }
 }
-
-/// Which modalities blend `c` observes, `[B]` gates of 1 or 0 each: frames when c > 0,
-/// joints when c < 1.
-fn observed(blend: &Tensor<1>) -> [Tensor<1>; 2] {
-    [
-        blend.clone().greater_elem(0.0).float(),
-        blend.clone().lower_elem(1.0).float(),
-    ]
-}
-
-/// How fast the joint correction fades in away from an observation, in phase: a fifth of it
-/// one step of a 100-step action away, 0.63 of it two steps away. At an observed step the
-/// model returns the observed joints.
-const OBSERVED_WIDTH: f64 = 0.02;
 
 /// The joint mean head's starting scale against He's: the correction starts small.
 const JOINT_CORRECTION_SCALE: f64 = 0.1;

@@ -51,19 +51,19 @@ pub struct DmbnPte {
 impl DmbnPteConfig {
     /// Builds the network; fails on an unsupported image size.
     pub fn init(&self, device: &Device) -> Result<DmbnPte, ModelError> {
-        let projection = ContextProjectionConfig::new().with_hidden(self.hidden);
+        let PteEncoders {
+            image_encoder,
+            joint_encoder,
+            time,
+            image_projection,
+            joint_projection,
+        } = pte_encoders(self.image_size, self.hidden, device)?;
         Ok(DmbnPte {
-            image_encoder: ImageEncoderConfig::new(3, encoder_filters(self.image_size)?)
-                .with_hidden(self.hidden)
-                .init(device),
-            joint_encoder: JointEncoderConfig::new(7)
-                .with_hidden(self.hidden)
-                .init(device),
-            time: TimeProjectionConfig::new()
-                .with_hidden(self.hidden)
-                .init(device),
-            image_projection: projection.init(device),
-            joint_projection: projection.init(device),
+            image_encoder,
+            joint_encoder,
+            time,
+            image_projection,
+            joint_projection,
             decoder: DecoderConfig::new(self.hidden, decoder_filters(self.image_size)?)
                 .with_sigma_floor(self.sigma_floor)
                 .init(device),
@@ -98,6 +98,36 @@ impl DmbnPte {
         let x = self.condition(&self.encode(batch), batch.target_times.clone());
         self.decoder.forward(x, None)
     }
+}
+
+/// DMBN-PTE's context encoders e_image, e_joint, P(t), g_image and g_joint, as DMBN-PTE and
+/// the attentive model both build them (each keeps them as its own fields, so that the
+/// weights keep their names in the model file).
+pub(super) struct PteEncoders {
+    pub image_encoder: ImageEncoder,
+    pub joint_encoder: JointEncoder,
+    pub time: TimeProjection,
+    pub image_projection: ContextProjection,
+    pub joint_projection: ContextProjection,
+}
+
+/// Builds [`PteEncoders`] for `image_size` frames and H = `hidden`; fails on an unsupported
+/// image size.
+pub(super) fn pte_encoders(
+    image_size: usize,
+    hidden: usize,
+    device: &Device,
+) -> Result<PteEncoders, ModelError> {
+    let projection = ContextProjectionConfig::new().with_hidden(hidden);
+    Ok(PteEncoders {
+        image_encoder: ImageEncoderConfig::new(3, encoder_filters(image_size)?)
+            .with_hidden(hidden)
+            .init(device),
+        joint_encoder: JointEncoderConfig::new(7).with_hidden(hidden).init(device),
+        time: TimeProjectionConfig::new().with_hidden(hidden).init(device),
+        image_projection: projection.init(device),
+        joint_projection: projection.init(device),
+    })
 }
 
 /// Every context slot's z_m = g_m(e_m(x) + P(t)) per modality, `[B, N, H]` each: the context

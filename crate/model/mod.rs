@@ -33,6 +33,7 @@ mod loss;
 #[allow(clippy::module_inception)]
 mod model;
 mod prediction;
+mod start;
 #[cfg(test)]
 mod testing;
 mod time_embedding;
@@ -60,8 +61,7 @@ pub use joint_decoder::{JointDecoder, JointDecoderConfig};
 pub use joint_encoder::{JointEncoder, JointEncoderConfig};
 pub use loss::{gaussian_loss, joint_nll, Loss, LossValues};
 pub use model::{Model, Network};
-pub use prediction::{
-    AttentiveContexts, ContextEncodings, FrameStart, JointStart, Prediction, Representation, Start,
-};
+pub use prediction::{AttentiveContexts, ContextEncodings, Prediction, Representation};
+pub use start::{FrameStart, JointStart, Start};
 pub use time_embedding::{TimeEmbedding, TimeEmbeddingConfig};
 pub use time_projection::{TimeProjection, TimeProjectionConfig};

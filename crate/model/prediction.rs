@@ -38,8 +38,8 @@ pub fn per_target(r: &Tensor<2>, m: usize) -> Tensor<3> {
 pub struct AttentiveContexts {
     /// `[B, N]`: context times.
     pub times: Tensor<2>,
-    /// `[B, N, 3·S·S]`: context frames.
-    pub frames: Tensor<3>,
+    /// `[B, N, 3, S, S]`: context frames.
+    pub frames: Tensor<5>,
     /// `[B, N, 7]`: context joints, normalised.
     pub joints: Tensor<3>,
     /// `[B, N, H]`: image context encodings z_image.
@@ -52,35 +52,6 @@ pub struct AttentiveContexts {
     pub padding: Tensor<2, Bool>,
     /// `[B]`: blending coefficient c of each sequence.
     pub blend: Tensor<1>,
-}
-
-/// Where the decoders' means start, per target: the attentive model's observations
-/// interpolated to the target times (zero for an unobserved modality).
-#[derive(Debug, Clone)]
-pub struct Start {
-    /// The frames, mixed in by the gated image decoder.
-    pub image: FrameStart,
-    /// The joints the joint decoder's mean corrects.
-    pub joint: JointStart,
-}
-
-/// The joints a joint decoder starts from: mean = joints + scale · correction.
-#[derive(Debug, Clone)]
-pub struct JointStart {
-    /// `[K, 7]`: the interpolated context joints, normalised (0 where not observed).
-    pub joints: Tensor<2>,
-    /// `[K, 1]`: how much of the correction applies: 0 at an observed step, towards 1 away
-    /// from the observations (1 where the joints are not observed).
-    pub scale: Tensor<2>,
-}
-
-/// The frames a gated image decoder starts from.
-#[derive(Debug, Clone)]
-pub struct FrameStart {
-    /// `[K, 3, S, S]`: the interpolated context frames.
-    pub frames: Tensor<4>,
-    /// `[K, 1, 1, 1]`: 1 where frames are observed, else 0 (the gate closes).
-    pub observed: Tensor<4>,
 }
 
 /// The per-context encodings before the set average, per modality: what the paper's
