@@ -54,6 +54,7 @@ fn main() {
         contexts_in_targets: false,
         joint_targets: 0,
         single_modality: 0.0,
+        prefix_contexts: 0.0,
         warp: None,
     });
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());

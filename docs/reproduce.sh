@@ -4,11 +4,11 @@
 # time-warp augmentation and (t/p/f, simulator) the attentive model.
 #
 #   bash docs/reproduce.sh 2020 PATH/TO/data2020   # the original DMBN data (ids 0-39)
-#   bash docs/reproduce.sh sim  PATH/TO/sim1000    # `dmbn simulate --out PATH --sequences 1000 --seed 1000`
+#   bash docs/reproduce.sh sim  PATH/TO/sim2000    # `dmbn simulate --out PATH --sequences 2000 --seed 1000`
 #
 # By default it uses the shipped weights (assets/models/{dmbn,pte,pte-aug,attn}-{2020,sim}.dmbn,
 # those that exist). With TRAIN=1 it first trains them into $OUT/runs with the README's recipe
-# (hours on 2 cores) and uses those. Results go to $OUT (default out/results-<set>): probe-*/probe.md, eval/<model>/<mode>/
+# (hours on 2 cores) and uses each run's best.dmbn (the best validation quality). Results go to $OUT (default out/results-<set>): probe-*/probe.md, eval/<model>/<mode>/
 # <id>-<action>/{figure.png,eval.json} and tpf.md, the mean scores per model and mode.
 set -euo pipefail
 
@@ -21,9 +21,9 @@ export CARGO_TARGET_DIR=${CARGO_TARGET_DIR:-$HOME/.cache/dmbn/target}
 case $set_name in
   # The paper holds out 10 of 50 ids; ids 40-49 are not public, so 32-39 (20%) are held out.
   2020) fraction=0.2; steps=3000; every=250; held=$(seq 32 39) ;;
-  # The simulator's 1,000 ids (seeds 1000-1999): the last 10% (900-999) are held out, as in
-  # training; the t/p/f evaluations use the last 10 of them.
-  sim) fraction=0.1; steps=4000; every=250; held=$(seq 990 999) ;;
+  # The simulator's 2,000 ids (seeds 1000-2999): the last 10% (1800-1999) are held out, as
+  # in training; the t/p/f evaluations use the last 10 of them.
+  sim) fraction=0.1; steps=3000; every=250; held=$(seq 1990 1999) ;;
   *) echo "error: the first argument is 2020 or sim, not '$set_name'" >&2; exit 2 ;;
 esac
 if [ ! -d "$data" ]; then
@@ -49,7 +49,7 @@ if [ "${TRAIN:-0}" = 1 ]; then
     kind=${m%-aug}
     extra=()
     [ "$m" = pte-aug ] && extra=(--augment)
-    [ "$m" = attn ] && extra=(--single-modality 0.3)
+    [ "$m" = attn ] && extra=(--single-modality 0.3 --prefix-contexts 0.3)
     # --resume continues an interrupted run; a finished one is left as it is.
     resume=()
     [ -f "$out/runs/$m/checkpoint/state.json" ] && resume=(--resume)
@@ -57,7 +57,7 @@ if [ "${TRAIN:-0}" = 1 ]; then
       --steps "$steps" --seed 1 --lr 1e-3 --schedule cosine --joint-weight 1 \
       --contexts-in-targets --targets-per-sequence 8 --joint-targets 32 --val-every "$every" \
       --checkpoint-every "$every" --val-fraction "$fraction" --half "${resume[@]}"
-    file[$m]=$out/runs/$m/model.dmbn
+    file[$m]=$out/runs/$m/best.dmbn
   done
 fi
 

@@ -73,7 +73,7 @@ fn default_model_reproduces_the_golden_scores() {
     assert!(samples[0][9 + 4] < 1e-12);
 }
 
-/// Episodes no shipped model trained on (the simulator weights trained on seeds 1000-1999),
+/// Episodes no shipped model trained on (the simulator weights trained on seeds 1000-2999),
 /// both actions.
 fn unseen() -> Vec<(&'static str, Sequence)> {
     (0..3)
@@ -138,7 +138,6 @@ fn shipped_simulator_models_use_their_observations() {
 /// The page's default, trained: its untrained self already starts from the linear
 /// interpolation of the observations, and training must improve on that too.
 #[test]
-#[ignore = "issue 11: attn-sim is not 20% better than an untrained attentive model (image MSE 0.0025 vs 0.0028, joints worse): run with --ignored"]
 fn the_default_model_improves_on_its_untrained_self() {
     uses_its_observations(&["attn-sim"]);
 }
@@ -198,10 +197,9 @@ fn uses_its_observations(names: &[&str]) {
 /// The issue's bars for the page's default model, on the unseen episodes: with 5 evenly
 /// spaced observations its joints are no worse than linear interpolation and within 0.02 rad
 /// at the observed steps, its frames no worse than the nearest observed frame and the object
-/// visible in them (mask IoU >= 0.3); observing the first 30%, the rest at most half the error
-/// of holding the last observation.
+/// visible in them (mask IoU >= 0.3); observing the first 30%, the rest of the joints at most
+/// half the error of holding the last observation (the frames: the next test).
 #[test]
-#[ignore = "issue 11's bars are not met yet (docs/results.md, Quality): run with --ignored"]
 fn the_default_model_beats_the_trivial_baselines() {
     let (seqs, mean) = (unseen(), mean_motion());
     let predictor = Predictor::from_bytes(golden::MODEL).unwrap();
@@ -236,6 +234,17 @@ fn the_default_model_beats_the_trivial_baselines() {
         model.joint_rmse,
         baseline.joint_rmse
     );
+}
+
+/// The last bar: observing the first 30%, the frames of the rest at most half the error of
+/// holding the last observation.
+#[test]
+#[ignore = "issue 11: attn-sim forecasts frames at 0.74x hold-last's error, the bar is 0.5x (docs/results.md, Quality): run with --ignored"]
+fn the_default_model_halves_hold_last_s_frame_error_when_forecasting() {
+    let (seqs, mean) = (unseen(), mean_motion());
+    let predictor = Predictor::from_bytes(golden::MODEL).unwrap();
+    let (model, baseline, _) = measure(&predictor, &seqs, Scenario::Extrap, &mean);
+    println!("extrap: {model:?}\nbaseline: {baseline:?}");
     assert!(
         model.image_mse <= 0.5 * baseline.image_mse,
         "extrap image MSE {} vs hold-last {}",

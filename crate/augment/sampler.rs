@@ -27,6 +27,11 @@ pub struct SamplerConfig {
     /// (joints), half each; the rest draw c ~ U(0, 1). What the page's "images only" and
     /// "joints only" settings need a model to have seen; 0 keeps the paper's c ~ U(0, 1).
     pub single_modality: f32,
+    /// Fraction of sequences observed only in a prefix of random length (10-90% of the
+    /// sequence), their targets anywhere: forecasting the rest of an action from its start
+    /// (the benchmark's `extrap`, the page's live mode), which contexts spread uniformly over
+    /// a sequence almost never ask for (3 uniform steps all in the first 30%: 2.7%). 0 for none.
+    pub prefix_contexts: f32,
     /// Time-warp every drawn sequence first (the paper's augmentation), or not.
     pub warp: Option<TimeWarpConfig>,
 }
@@ -79,7 +84,12 @@ impl Sampler {
             let seq = warped.as_ref().unwrap_or(seq);
             let t = seq.len();
             let n = rng.random_range(1..=cfg.max_contexts.min(t.saturating_sub(1)).max(1));
-            let steps = index::sample(rng, t, (n + cfg.targets).min(t)).into_vec();
+            let prefix = cfg.prefix_contexts > 0.0 && rng.random::<f32>() < cfg.prefix_contexts;
+            let steps = if prefix {
+                prefix_steps(rng, t, n, cfg.targets)
+            } else {
+                index::sample(rng, t, (n + cfg.targets).min(t)).into_vec()
+            };
             let (contexts, rest) = steps.split_at(n);
             let targets: Vec<usize> = if cfg.contexts_in_targets {
                 contexts
@@ -140,6 +150,19 @@ impl Sampler {
         batch.blend[0] = blend;
         batch
     }
+}
+
+/// `n` context steps within a prefix of 10-90% of a `t`-step sequence, then up to `targets`
+/// other steps of the whole sequence (the layout `index::sample` gives: contexts first).
+fn prefix_steps(rng: &mut Pcg64, t: usize, n: usize, targets: usize) -> Vec<usize> {
+    let lo = (t / 10).max(n);
+    let hi = (t * 9 / 10).max(lo);
+    let len = rng.random_range(lo..=hi).min(t);
+    let mut steps = index::sample(rng, len, n.min(len)).into_vec();
+    let others: Vec<usize> = (0..t).filter(|k| !steps.contains(k)).collect();
+    let picked = index::sample(rng, others.len(), targets.min(others.len()));
+    steps.extend(picked.iter().map(|i| others[i]));
+    steps
 }
 
 /// A zeroed batch of the given dimensions.
@@ -223,6 +246,7 @@ mod tests {
             contexts_in_targets: false,
             joint_targets: 0,
             single_modality: 0.0,
+            prefix_contexts: 0.0,
             warp: None,
         });
         let mut rng = Pcg64::seed_from_u64(1);
@@ -263,6 +287,7 @@ mod tests {
             contexts_in_targets: true,
             joint_targets: 0,
             single_modality: 0.0,
+            prefix_contexts: 0.0,
             warp: None,
         });
         let batch = sampler.sample(
@@ -313,6 +338,7 @@ mod tests {
             contexts_in_targets: true,
             joint_targets: 0,
             single_modality: 0.5,
+            prefix_contexts: 0.0,
             warp: None,
         });
         let batch = sampler.sample(
@@ -325,5 +351,68 @@ mod tests {
         assert!((60..140).contains(&count(0.0)), "{}", count(0.0));
         assert!((60..140).contains(&count(1.0)), "{}", count(1.0));
         assert!(batch.blend.iter().all(|c| (0.0..=1.0).contains(c)));
+    }
+
+    #[test]
+    fn prefix_contexts_observe_the_start_and_target_the_rest() {
+        let pool = vec![seq(100)];
+        let sampler = Sampler::new(SamplerConfig {
+            batch: 300,
+            max_contexts: 5,
+            targets: 8,
+            contexts_in_targets: true,
+            joint_targets: 0,
+            single_modality: 0.0,
+            prefix_contexts: 1.0,
+            warp: None,
+        });
+        let batch = sampler.sample(
+            &pool,
+            &Normalization::identity(),
+            &mut Pcg64::seed_from_u64(4),
+        );
+        let mut last_contexts = Vec::new();
+        let mut future_targets = 0;
+        for b in 0..300 {
+            // Joint value k marks step k.
+            let n = batch.context_mask[b * 5..b * 5 + 5]
+                .iter()
+                .filter(|&&v| v == 1.0)
+                .count();
+            let ctx: Vec<f32> = (0..n)
+                .map(|i| batch.context_joints[(b * 5 + i) * 7])
+                .collect();
+            let last = ctx.iter().cloned().fold(0.0, f32::max);
+            assert!(
+                last < 90.0,
+                "a context at step {last}, past 90% of the sequence"
+            );
+            last_contexts.push(last);
+            let targets: Vec<f32> = (0..8)
+                .map(|j| batch.target_joints[(b * 8 + j) * 7])
+                .collect();
+            assert_eq!(
+                &targets[..n],
+                &ctx[..],
+                "the contexts come first among the targets"
+            );
+            assert!(targets[n..].iter().all(|k| !ctx.contains(k)));
+            future_targets += targets[n..].iter().filter(|&&k| k > last).count();
+        }
+        // Prefixes of 10-90%: some end early, some late, and most targets lie ahead.
+        assert!(last_contexts.iter().any(|&k| k < 30.0));
+        assert!(last_contexts.iter().any(|&k| k > 60.0));
+        let others: usize = (0..300)
+            .map(|b| {
+                8 - batch.context_mask[b * 5..b * 5 + 5]
+                    .iter()
+                    .filter(|&&v| v == 1.0)
+                    .count()
+            })
+            .sum();
+        assert!(
+            future_targets * 2 > others,
+            "{future_targets} of {others} targets ahead"
+        );
     }
 }

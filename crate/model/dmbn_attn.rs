@@ -1,6 +1,7 @@
 use burn::config::Config;
 use burn::module::{Module, Param};
 use burn::nn::attention::{MhaInput, MultiHeadAttention, MultiHeadAttentionConfig};
+use burn::nn::Linear;
 use burn::tensor::{Device, Tensor};
 
 use super::config::{check_heads, decoder_filters, ATTENTION_HEADS};
@@ -38,8 +39,9 @@ pub struct DmbnAttnConfig {
 /// - per target and modality, multi-head attention with the target time's embedding as the
 ///   query, the contexts' time embeddings as keys and their z_m as values;
 /// - blend r_t = c·a_image + (1 − c)·a_joint, then r_t − P(t_target), plus an embedding of
-///   which modalities are observed (frames when c > 0, joints when c < 1), into the same
-///   decoders;
+///   which modalities are observed (frames when c > 0, joints when c < 1) and a projection
+///   of where the decoders start (the interpolated joints, the gaps to the observations
+///   before and after the target), into the same decoders;
 /// - the decoders start from the observations linearly interpolated to the target time (held
 ///   outside them; see [`linear_weights`](super::linear_weights)) for an observed modality,
 ///   the quality benchmark's trivial baseline: the joint mean is a correction of them, the
@@ -67,6 +69,9 @@ pub struct DmbnAttn {
     /// `[2, H]`: added to the decoder input when frames (row 0) and joints (row 1) are
     /// observed, so that it knows which means start from observations.
     pub observed: Param<Tensor<2>>,
+    /// 9 → H: [`Start::features`] (the interpolated joints and the gaps to the
+    /// observations), added to the decoder input.
+    pub start_projection: Linear,
     /// Shared layer, image and joint decoders.
     pub decoder: Decoder,
 }
@@ -96,6 +101,7 @@ impl DmbnAttnConfig {
             image_attention: attention.init(device),
             joint_attention: attention.init(device),
             observed: Param::from_tensor(Tensor::zeros([2, self.hidden], device)),
+            start_projection: super::init::dense(START_FEATURES, self.hidden, device),
             decoder: starting_at_the_observations(
                 DecoderConfig::new(self.hidden, decoder_filters(self.image_size)?)
                     .with_sigma_floor(self.sigma_floor)
@@ -156,7 +162,9 @@ impl DmbnAttn {
             .observed()
             .matmul(self.observed.val())
             .unsqueeze_dim::<3>(1);
-        let x = r - self.time.forward(target_times) + embedding;
+        let x = r - self.time.forward(target_times)
+            + embedding
+            + self.start_projection.forward(start.features());
         (x, start)
     }
 
@@ -166,6 +174,9 @@ impl DmbnAttn {
         self.decoder.forward(x, Some(start))
     }
 }
+
+/// Size of [`Start::features`]: 7 joints and 2 gaps.
+const START_FEATURES: usize = 9;
 
 /// The joint mean head's starting scale against He's: the correction starts small.
 const JOINT_CORRECTION_SCALE: f64 = 0.1;

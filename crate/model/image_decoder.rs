@@ -10,9 +10,10 @@ use super::feature_map::{new_conv3x3, Activation, FeatureMap, KernelCache};
 use super::gaussian::bounded_sigma;
 use super::FrameStart;
 
-/// The gate head's starting bias: g = σ(3) ≈ 0.95, a fresh gated decoder nearly copies the
-/// frames it starts from.
-const GATE_BIAS: f32 = 3.0;
+/// The gate head's starting bias: σ(0) = 1/2 away from the observations, so that the drawn
+/// frame gets as much gradient as the copied one (a gate starting nearly open starves it, and
+/// a model that only copies cannot forecast what it has not seen).
+const GATE_BIAS: f32 = 0.0;
 
 /// Filters of the two convolutions between the last upsampling block and the heads.
 pub const IMAGE_DECODER_TAIL: [usize; 2] = [16, 8];
@@ -37,8 +38,9 @@ pub struct ImageDecoderConfig {
 /// The image decoder: reshape to 2x2, blocks of Conv 3x3 + ReLU + nearest UpSampling x2,
 /// Conv 16 + ReLU, Conv 8 + ReLU, then two 3-channel 3x3 heads: the mean (through a sigmoid,
 /// since pixels lie in [0, 1]) and σ (see [`bounded_sigma`]); gated, a 1-channel gate head g
-/// too, and the mean is g·start + (1 − g)·its own (g = 0 where the start is not observed):
-/// copy what stays as observed, draw what moved.
+/// too, and the mean is g·start + (1 − g)·its own with g = n + (1 − n)·σ(gate), n the
+/// start's nearness to an observation (g = 1 at an observed step, 0 where the start is not
+/// observed): copy what stays as observed, draw what moved.
 #[derive(Module, Debug)]
 pub struct ImageDecoder {
     /// One 3x3 convolution per upsampling block.
@@ -201,7 +203,10 @@ impl ImageDecoder {
         let sigma = bounded_sigma(raw.next().expect("the σ head"), self.sigma_floor);
         let mean = match (raw.next(), start) {
             (Some(gate), Some(start)) => {
-                let g = sigmoid(gate) * start.observed;
+                // Held open at an observed step, learnt away from the observations.
+                let near = start.near;
+                let g =
+                    (sigmoid(gate) * near.clone().neg().add_scalar(1.0) + near) * start.observed;
                 start.frames * g.clone() + mean * g.neg().add_scalar(1.0)
             }
             _ => mean,
@@ -283,6 +288,7 @@ mod tests {
             let start = FrameStart {
                 frames: Tensor::random([2, 3, 16, 16], Distribution::Default, &device),
                 observed: Tensor::<1>::from_floats([1.0, 0.0], &device).reshape([2, 1, 1, 1]),
+                near: Tensor::<1>::from_floats([0.3, 0.3], &device).reshape([2, 1, 1, 1]),
             };
             let (want, _) = decoder.heads(decoder.forward_burn(x.clone()), Some(start.clone()));
             let (got, _) = decoder.forward(x.clone(), Some(start));

@@ -31,14 +31,33 @@ pub fn linear_weights(times: &[f32], real: &[bool], target: f32) -> Vec<f32> {
 
 /// How far `target` is from the nearest real observation (infinite without one).
 pub fn nearest_distance(times: &[f32], real: &[bool], target: f32) -> f32 {
-    (0..times.len())
-        .filter(|&i| real[i])
-        .map(|i| (times[i] - target).abs())
-        .fold(f32::INFINITY, f32::min)
+    let [before, after] = gaps(times, real, target);
+    before.min(after)
 }
 
-/// [`linear_weights`] and [`nearest_distance`] for a batch: `[B, M]` target times, `[B, N]`
-/// context times and mask (1 real, 0 padding) to `[B, M, N]` weights and `[B, M]` distances.
+/// How far `target` is from the nearest real observation at or before it and at or after
+/// it: where it sits in the gap it falls in, and how long that gap is (past the last
+/// observation: how far ahead it forecasts). Infinite on a side with no observation.
+pub fn gaps(times: &[f32], real: &[bool], target: f32) -> [f32; 2] {
+    let side = |before: bool| {
+        (0..times.len())
+            .filter(|&i| {
+                real[i]
+                    && if before {
+                        times[i] <= target
+                    } else {
+                        times[i] >= target
+                    }
+            })
+            .map(|i| (times[i] - target).abs())
+            .fold(f32::INFINITY, f32::min)
+    };
+    [side(true), side(false)]
+}
+
+/// [`linear_weights`] and [`gaps`] for a batch: `[B, M]` target times, `[B, N]` context
+/// times and mask (1 real, 0 padding) to `[B, M, N]` weights and `[B, M, 2]` gaps (infinite
+/// ones as 1, the length of a whole action).
 /// Both depend on the times alone, so they are computed as plain numbers and carry no
 /// gradient.
 pub fn interpolation_tensors(
@@ -46,7 +65,7 @@ pub fn interpolation_tensors(
     context_times: &Tensor<2>,
     context_mask: &Tensor<2>,
     device: &Device,
-) -> (Tensor<3>, Tensor<2>) {
+) -> (Tensor<3>, Tensor<3>) {
     let [b, m] = target_times.dims();
     let n = context_times.dims()[1];
     let read = |t: &Tensor<2>| -> Vec<f32> {
@@ -57,18 +76,18 @@ pub fn interpolation_tensors(
     };
     let (targets, times, mask) = (read(target_times), read(context_times), read(context_mask));
     let mut weights = Vec::with_capacity(b * m * n);
-    let mut distances = Vec::with_capacity(b * m);
+    let mut distances = Vec::with_capacity(b * m * 2);
     for s in 0..b {
         let times = &times[s * n..(s + 1) * n];
         let real: Vec<bool> = mask[s * n..(s + 1) * n].iter().map(|&v| v > 0.5).collect();
         for &t in &targets[s * m..(s + 1) * m] {
             weights.extend(linear_weights(times, &real, t));
-            distances.push(nearest_distance(times, &real, t));
+            distances.extend(gaps(times, &real, t).map(|d| d.min(1.0)));
         }
     }
     (
         Tensor::from_data(TensorData::new(weights, [b, m, n]), device),
-        Tensor::from_data(TensorData::new(distances, [b, m]), device),
+        Tensor::from_data(TensorData::new(distances, [b, m, 2]), device),
     )
 }
 
@@ -95,6 +114,14 @@ mod tests {
         close(linear_weights(&times, &[false; 4], 0.9), [0.0; 4]);
         assert!((nearest_distance(&times, &real, 0.32) - 0.02).abs() < 1e-6);
         assert_eq!(nearest_distance(&times, &[false; 4], 0.9), f32::INFINITY);
+        let close2 = |[a, b]: [f32; 2], [c, d]: [f32; 2]| {
+            assert!((a - c).abs() < 1e-6 && (b - d).abs() < 1e-6, "{a} {b}")
+        };
+        close2(gaps(&times, &real, 0.2), [0.1, 0.1]);
+        close2(gaps(&times, &real, 0.3), [0.0, 0.0]);
+        close2(gaps(&times, &real, 0.45), [0.15, 0.05]);
+        let [before, after] = gaps(&times, &real, 0.9);
+        assert!((before - 0.4).abs() < 1e-6 && after == f32::INFINITY);
     }
 
     #[test]
@@ -107,8 +134,10 @@ mod tests {
         let w: Vec<f32> = w.into_data().try_to_vec().unwrap();
         assert_eq!(w, vec![0.5, 0.5, 1.0, 0.0]);
         let d: Vec<f32> = d.into_data().try_to_vec().unwrap();
+        // Before and after each target; nothing after 0.9 (capped at 1).
+        let want = [0.25, 0.25, 0.7, 1.0];
         assert!(
-            (d[0] - 0.25).abs() < 1e-6 && (d[1] - 0.7).abs() < 1e-6,
+            d.iter().zip(want).all(|(g, w)| (g - w).abs() < 1e-6),
             "{d:?}"
         );
     }

@@ -3,9 +3,9 @@ use burn::tensor::Tensor;
 use super::interpolation::interpolation_tensors;
 use super::AttentiveContexts;
 
-/// How fast the joint correction fades in away from an observation, in phase: a fifth of it
-/// one step of a 100-step action away, 0.63 of it two steps away. At an observed step the
-/// model returns the observed joints.
+/// How fast the decoders' own predictions fade in away from an observation, in phase: a
+/// fifth of the joint correction (and of the drawn frame's free weight) one step of a 100-step
+/// action away, 0.63 two steps away. At an observed step the model returns its observations.
 const OBSERVED_WIDTH: f64 = 0.02;
 
 /// Where the attentive model's decoders start, per target: its observations linearly
@@ -17,8 +17,8 @@ const OBSERVED_WIDTH: f64 = 0.02;
 pub struct Start {
     /// `[B, M, N]`: each context's interpolation weight at each target.
     weights: Tensor<3>,
-    /// `[B, M]`: each target's distance to its nearest observation.
-    distance: Tensor<2>,
+    /// `[B, M, 2]`: each target's distance to the nearest observation before and after it.
+    gaps: Tensor<3>,
     /// `[B, 2]`: 1 where frames (column 0) and joints (column 1) are observed, else 0.
     observed: Tensor<2>,
     /// `[B, N, 3, S, S]` and `[B, N, 7]`: the observations.
@@ -33,6 +33,9 @@ pub struct FrameStart {
     pub frames: Tensor<4>,
     /// `[K, 1, 1, 1]`: 1 where frames are observed, else 0 (the gate closes).
     pub observed: Tensor<4>,
+    /// `[K, 1, 1, 1]`: e^(−d / width) for the distance d to the nearest observation: 1 at an
+    /// observed step, where the gate is held open (the observed frame is returned).
+    pub near: Tensor<4>,
 }
 
 /// The joints a joint decoder starts from: mean = joints + scale · correction.
@@ -49,7 +52,7 @@ impl Start {
     /// The interpolation of `contexts` at `[B, M]` target times.
     pub fn new(contexts: &AttentiveContexts, target_times: &Tensor<2>) -> Start {
         let mask = contexts.padding.clone().bool_not().float();
-        let (weights, distance) =
+        let (weights, gaps) =
             interpolation_tensors(target_times, &contexts.times, &mask, &target_times.device());
         let blend = &contexts.blend;
         let observed = Tensor::stack::<2>(
@@ -61,7 +64,7 @@ impl Start {
         );
         Start {
             weights,
-            distance,
+            gaps,
             observed,
             frames: contexts.frames.clone(),
             joints: contexts.joints.clone(),
@@ -71,6 +74,15 @@ impl Start {
     /// `[B, 2]`: 1 where frames (column 0) and joints (column 1) are observed, else 0.
     pub fn observed(&self) -> Tensor<2> {
         self.observed.clone()
+    }
+
+    /// What the decoder is told about where it starts, `[B, M, 9]`: the interpolated joints
+    /// (normalised, 0 where not observed) and the gaps before and after each target, so that
+    /// the correction it adds depends on what it corrects and on how far the observations are.
+    pub fn features(&self) -> Tensor<3> {
+        let [b, m, _] = self.weights.dims();
+        let joints = self.joints().joints.reshape([b, m, 7]);
+        Tensor::cat(vec![joints, self.gaps.clone()], 2)
     }
 
     /// The frames at the targets, `[B·M, 3, S, S]`, with where they are observed.
@@ -84,6 +96,7 @@ impl Start {
         FrameStart {
             frames: frames.reshape([b * m, c, h, w]),
             observed: self.column(0).expand([b, m]).reshape([b * m, 1, 1, 1]),
+            near: self.nearness().reshape([b * m, 1, 1, 1]),
         }
     }
 
@@ -94,13 +107,22 @@ impl Start {
         let joints = self.weights.clone().matmul(self.joints.clone())
             * observed.clone().unsqueeze_dim::<3>(2);
         // 1 − e^(−d / width) where the joints are observed, else 1.
-        let scale = (self.distance.clone().div_scalar(-OBSERVED_WIDTH).exp() * observed)
-            .neg()
-            .add_scalar(1.0);
+        let scale = (self.nearness() * observed).neg().add_scalar(1.0);
         JointStart {
             joints: joints.reshape([b * m, 7]),
             scale: scale.reshape([b * m, 1]),
         }
+    }
+
+    /// `[B, M]`: e^(−d / width), d the distance to the nearest observation.
+    fn nearness(&self) -> Tensor<2> {
+        let [b, m, _] = self.gaps.dims();
+        let [before, after] = [0, 1].map(|i| self.gaps.clone().narrow(2, i, 1));
+        before
+            .min_pair(after)
+            .reshape([b, m])
+            .div_scalar(-OBSERVED_WIDTH)
+            .exp()
     }
 
     /// `[B, 1]`: one column of `observed`.

@@ -22,6 +22,9 @@ pub struct CheckpointState {
     pub normalization: Normalization,
     /// Best validation loss so far, and its step.
     pub best_val: Option<(u64, f32)>,
+    /// Best validation quality score so far (`best.dmbn`), and its step.
+    #[serde(default)]
+    pub best_quality: Option<(u64, f32)>,
 }
 
 /// A checkpoint folder: `model.dmbn` (model file, f32), `optimizer.bpk` (Adam state),

@@ -61,6 +61,10 @@ pub struct TrainConfig {
     /// for the paper's c ~ U(0, 1) everywhere.
     #[serde(default)]
     pub single_modality: f32,
+    /// Fraction of training sequences observed only in a prefix (forecasting the rest); 0 for
+    /// contexts anywhere.
+    #[serde(default)]
+    pub prefix_contexts: f32,
     /// Base learning rate (Adam).
     pub lr: f64,
     /// Learning-rate schedule.
@@ -79,6 +83,10 @@ pub struct TrainConfig {
     pub val_batches: usize,
     /// Write a checkpoint every this many steps.
     pub checkpoint_every: u64,
+    /// Held-out sequences the quality benchmark scores at each validation (the best model is
+    /// kept as `best.dmbn`); 0 for none.
+    #[serde(default)]
+    pub quality_sequences: usize,
     /// Time-warp augmentation of training sequences (the paper's, for DMBN-PTE), or none.
     #[serde(default)]
     pub augment: Option<TimeWarpConfig>,
@@ -98,6 +106,7 @@ impl TrainConfig {
             contexts_in_targets: false,
             joint_targets: 0,
             single_modality: 0.0,
+            prefix_contexts: 0.0,
             lr: 1e-4,
             schedule: Schedule::Constant,
             clip_norm: 1.0,
@@ -107,6 +116,7 @@ impl TrainConfig {
             val_every: 200,
             val_batches: 8,
             checkpoint_every: 500,
+            quality_sequences: 0,
             augment: None,
         }
     }

@@ -4,7 +4,7 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
-use super::TrainError;
+use super::{TrainError, ValQuality};
 
 /// One line of `metrics.jsonl`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -34,6 +34,10 @@ pub struct Metrics {
     pub val_context_image_mse: Option<f32>,
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub val_context_joint_mse: Option<f32>,
+    /// The quality benchmark on held-out sequences (model over baseline, per scenario and
+    /// modality), where it ran.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub val_quality: Option<ValQuality>,
     /// Optimiser steps per second over the last logging interval.
     pub steps_per_s: f64,
 }

@@ -7,6 +7,7 @@ mod error;
 mod metrics;
 mod split;
 mod trainer;
+mod val_quality;
 
 pub use checkpoint::{Checkpoint, CheckpointState};
 pub use config::{Schedule, TrainConfig};
@@ -14,3 +15,4 @@ pub use error::TrainError;
 pub use metrics::{Metrics, MetricsLog};
 pub use split::Split;
 pub use trainer::{Progress, Trainer};
+pub use val_quality::ValQuality;

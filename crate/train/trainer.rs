@@ -8,14 +8,21 @@ use rand::SeedableRng;
 use rand_pcg::Pcg64;
 
 use crate::augment::{Batch, Sampler, SamplerConfig};
+use crate::data::Sequence;
 use crate::model::{
     self, joint_nll, joint_target_tensors, tensors, LossValues, Model, ModelConfig, Normalization,
 };
+use crate::predict::Predictor;
 
-use super::{Checkpoint, CheckpointState, Metrics, MetricsLog, Split, TrainConfig, TrainError};
+use super::{
+    Checkpoint, CheckpointState, Metrics, MetricsLog, Split, TrainConfig, TrainError, ValQuality,
+};
 
 /// Separate random streams: validation batches never shift the training stream.
 const VAL_STREAM: u64 = 0x5851_F42D_4C95_7F2D;
+
+/// The step and value of the best validation so far.
+type Best = Option<(u64, f32)>;
 
 /// What the progress display shows after each step.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -41,6 +48,8 @@ pub struct Trainer {
     val_set: Vec<Batch>,
     log: MetricsLog,
     best_val: Option<(u64, f32)>,
+    /// Best [`ValQuality::score`] so far and its step: the model in `out/best.dmbn`.
+    best_quality: Option<(u64, f32)>,
     device: Device,
 }
 
@@ -75,7 +84,7 @@ impl Trainer {
             split,
             normalization,
             log,
-            None,
+            (None, None),
             device,
         ))
     }
@@ -109,7 +118,7 @@ impl Trainer {
             split,
             state.normalization,
             log,
-            state.best_val,
+            (state.best_val, state.best_quality),
             device,
         ))
     }
@@ -125,7 +134,7 @@ impl Trainer {
         split: Split,
         normalization: Normalization,
         log: MetricsLog,
-        best_val: Option<(u64, f32)>,
+        (best_val, best_quality): (Best, Best),
         device: Device,
     ) -> Trainer {
         let plain = SamplerConfig {
@@ -135,6 +144,7 @@ impl Trainer {
             contexts_in_targets: config.contexts_in_targets,
             joint_targets: 0,
             single_modality: config.single_modality,
+            prefix_contexts: config.prefix_contexts,
             warp: None,
         };
         // Training batches are warped with --augment; validation always sees plain sequences.
@@ -165,6 +175,7 @@ impl Trainer {
             val_set,
             log,
             best_val,
+            best_quality,
             device,
         }
     }
@@ -271,13 +282,19 @@ impl Trainer {
             let step = self.step;
             let elapsed = timer.0.elapsed().as_secs_f64();
             let steps_per_s = (step - timer.1) as f64 / elapsed.max(1e-9);
-            let val = if step % self.config.val_every == 0 || step == self.config.steps {
+            let validating = step % self.config.val_every == 0 || step == self.config.steps;
+            let val = if validating {
                 let (v, c) = self.validate()?;
                 if self.best_val.is_none_or(|(_, best)| v.total < best) {
                     self.best_val = Some((step, v.total));
                 }
                 last_val = Some(v.total);
                 Some((v, c))
+            } else {
+                None
+            };
+            let quality = if validating {
+                self.validate_quality(half)?
             } else {
                 None
             };
@@ -295,6 +312,7 @@ impl Trainer {
                 val_context_loss: val.map(|(_, c)| c.total),
                 val_context_image_mse: val.map(|(_, c)| c.image_mse),
                 val_context_joint_mse: val.map(|(_, c)| c.joint_mse),
+                val_quality: quality,
                 steps_per_s,
             })?;
             if step % self.config.checkpoint_every == 0 || step == self.config.steps {
@@ -316,6 +334,40 @@ impl Trainer {
         Ok(path)
     }
 
+    /// The quality benchmark on up to `config.quality_sequences` held-out sequences (evenly
+    /// spread over them); a better [`ValQuality::score`] than any before is written to
+    /// `out/best.dmbn`. `None` when it is off or there is nothing to score.
+    pub fn validate_quality(&mut self, half: bool) -> Result<Option<ValQuality>, TrainError> {
+        let (n, val) = (self.config.quality_sequences, &self.split.val);
+        if n == 0 || val.is_empty() {
+            return Ok(None);
+        }
+        let picked: Vec<&Sequence> = (0..n.min(val.len()))
+            .map(|i| &val[i * val.len() / n.min(val.len())])
+            .collect();
+        let bytes = model::save_bytes(&self.model, &self.normalization, false)?;
+        let predictor = Predictor::from_bytes(&bytes)?;
+        let Some(quality) = ValQuality::measure(&predictor, &picked)? else {
+            return Ok(None);
+        };
+        let score = quality.score();
+        if score.is_finite() && self.best_quality.is_none_or(|(_, best)| score < best) {
+            self.best_quality = Some((self.step, score));
+            model::save(self.best_path(), &self.model, &self.normalization, half)?;
+        }
+        Ok(Some(quality))
+    }
+
+    /// Where the model with the best validation quality is kept.
+    pub fn best_path(&self) -> PathBuf {
+        self.out.join("best.dmbn")
+    }
+
+    /// The best validation quality so far and its step.
+    pub fn best_quality(&self) -> Option<(u64, f32)> {
+        self.best_quality
+    }
+
     /// Write a checkpoint of the current state.
     pub fn checkpoint(&self) -> Result<(), TrainError> {
         let model_bytes = model::save_bytes(&self.model, &self.normalization, false)?;
@@ -332,6 +384,7 @@ impl Trainer {
             config: self.config.clone(),
             normalization: self.normalization,
             best_val: self.best_val,
+            best_quality: self.best_quality,
         };
         Checkpoint::write(&self.out, &model_bytes, &optim_bytes, &state)
     }
@@ -388,11 +441,17 @@ fn validate(config: &TrainConfig) -> Result<(), TrainError> {
             format!("{}: expected a positive number", config.clip_norm),
         ));
     }
-    if !(0.0..=1.0).contains(&config.single_modality) {
-        return Err(TrainError::config(
-            "single_modality",
-            format!("{}: expected a fraction in [0, 1]", config.single_modality),
-        ));
+    let fractions = [
+        ("single_modality", config.single_modality),
+        ("prefix_contexts", config.prefix_contexts),
+    ];
+    for (field, value) in fractions {
+        if !(0.0..=1.0).contains(&value) {
+            return Err(TrainError::config(
+                field,
+                format!("{value}: expected a fraction in [0, 1]"),
+            ));
+        }
     }
     if let Some(warp) = &config.augment {
         warp.validate()

@@ -68,6 +68,11 @@ struct Args {
     /// c ~ U(0, 1).
     #[arg(long, default_value_t = 0.0)]
     single_modality: f32,
+    /// Fraction of training sequences observed only in their first 10-90% (targets anywhere):
+    /// forecasting the rest of an action from its start, as `dmbn score --scenario extrap`
+    /// and the page's live mode ask.
+    #[arg(long, default_value_t = 0.0)]
+    prefix_contexts: f32,
     /// Frame size the model works at (64 or 128; frames are resized when read).
     #[arg(long, default_value_t = 64)]
     image_size: usize,
@@ -95,6 +100,11 @@ struct Args {
     /// Write a checkpoint every this many steps.
     #[arg(long, default_value_t = 500)]
     checkpoint_every: u64,
+    /// Held-out sequences the quality benchmark (`dmbn score`'s interp and extrap against
+    /// the trivial baselines) scores at each validation; the best model so far is kept as
+    /// best.dmbn in --out. 0 turns it off.
+    #[arg(long, default_value_t = 10)]
+    quality_sequences: usize,
     /// Continue the run in --out from its last checkpoint (same settings).
     #[arg(long)]
     resume: bool,
@@ -139,6 +149,7 @@ fn run(args: Args) -> Result<(), TrainError> {
         config.contexts_in_targets = args.contexts_in_targets;
         config.joint_targets = args.joint_targets;
         config.single_modality = args.single_modality;
+        config.prefix_contexts = args.prefix_contexts;
         config.image_size = args.image_size;
         config.lr = args.lr;
         config.schedule = match args.schedule {
@@ -157,6 +168,7 @@ fn run(args: Args) -> Result<(), TrainError> {
         config.val_fraction = args.val_fraction;
         config.val_every = args.val_every;
         config.checkpoint_every = args.checkpoint_every;
+        config.quality_sequences = args.quality_sequences;
         config.augment = args.augment.then(TimeWarpConfig::default);
         Trainer::new(&args.data, &args.out, config)?
     };
@@ -185,5 +197,11 @@ fn run(args: Args) -> Result<(), TrainError> {
     })?;
     bar.finish();
     println!("wrote {}", path.display());
+    if let Some((step, score)) = trainer.best_quality() {
+        println!(
+            "wrote {} (step {step}: {score:.3} of the trivial baselines' error, validation ids)",
+            trainer.best_path().display()
+        );
+    }
     Ok(())
 }
