@@ -29,12 +29,6 @@ pub fn linear_weights(times: &[f32], real: &[bool], target: f32) -> Vec<f32> {
     weights
 }
 
-/// How far `target` is from the nearest real observation (infinite without one).
-pub fn nearest_distance(times: &[f32], real: &[bool], target: f32) -> f32 {
-    let [before, after] = gaps(times, real, target);
-    before.min(after)
-}
-
 /// How far `target` is from the nearest real observation at or before it and at or after
 /// it: where it sits in the gap it falls in, and how long that gap is (past the last
 /// observation: how far ahead it forecasts). Infinite on a side with no observation.
@@ -112,8 +106,10 @@ mod tests {
         close(linear_weights(&times, &real, 0.0), [0.0, 1.0, 0.0, 0.0]);
         close(linear_weights(&times, &real, 0.9), [1.0, 0.0, 0.0, 0.0]);
         close(linear_weights(&times, &[false; 4], 0.9), [0.0; 4]);
-        assert!((nearest_distance(&times, &real, 0.32) - 0.02).abs() < 1e-6);
-        assert_eq!(nearest_distance(&times, &[false; 4], 0.9), f32::INFINITY);
+        // The padding slot at 0.31 is not the nearest observation of 0.32: 0.3 is.
+        let [before, after] = gaps(&times, &real, 0.32);
+        assert!((before.min(after) - 0.02).abs() < 1e-6);
+        assert_eq!(gaps(&times, &[false; 4], 0.9), [f32::INFINITY; 2]);
         let close2 = |[a, b]: [f32; 2], [c, d]: [f32; 2]| {
             assert!((a - c).abs() < 1e-6 && (b - d).abs() < 1e-6, "{a} {b}")
         };

@@ -56,7 +56,7 @@ pub use file::{load_bytes, load_bytes_expecting, read_header, save_bytes, ModelH
 pub use gaussian::bounded_sigma;
 pub use image_decoder::{upsample2, ImageDecoder, ImageDecoderConfig};
 pub use image_encoder::{ImageEncoder, ImageEncoderConfig};
-pub use interpolation::{gaps, interpolation_tensors, linear_weights, nearest_distance};
+pub use interpolation::{gaps, interpolation_tensors, linear_weights};
 pub use joint_decoder::{JointDecoder, JointDecoderConfig};
 pub use joint_encoder::{JointEncoder, JointEncoderConfig};
 pub use loss::{gaussian_loss, joint_nll, Loss, LossValues};

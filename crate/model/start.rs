@@ -80,9 +80,7 @@ impl Start {
     /// (normalised, 0 where not observed) and the gaps before and after each target, so that
     /// the correction it adds depends on what it corrects and on how far the observations are.
     pub fn features(&self) -> Tensor<3> {
-        let [b, m, _] = self.weights.dims();
-        let joints = self.joints().joints.reshape([b, m, 7]);
-        Tensor::cat(vec![joints, self.gaps.clone()], 2)
+        Tensor::cat(vec![self.interpolated_joints(), self.gaps.clone()], 2)
     }
 
     /// The frames at the targets, `[B·M, 3, S, S]`, with where they are observed.
@@ -103,15 +101,17 @@ impl Start {
     /// The joints at the targets, `[B·M, 7]`, and the scale of the correction.
     pub fn joints(&self) -> JointStart {
         let [b, m, _] = self.weights.dims();
-        let observed = self.column(1);
-        let joints = self.weights.clone().matmul(self.joints.clone())
-            * observed.clone().unsqueeze_dim::<3>(2);
         // 1 − e^(−d / width) where the joints are observed, else 1.
-        let scale = (self.nearness() * observed).neg().add_scalar(1.0);
+        let scale = (self.nearness() * self.column(1)).neg().add_scalar(1.0);
         JointStart {
-            joints: joints.reshape([b * m, 7]),
+            joints: self.interpolated_joints().reshape([b * m, 7]),
             scale: scale.reshape([b * m, 1]),
         }
+    }
+
+    /// `[B, M, 7]`: the context joints interpolated to the targets, 0 where not observed.
+    fn interpolated_joints(&self) -> Tensor<3> {
+        self.weights.clone().matmul(self.joints.clone()) * self.column(1).unsqueeze_dim::<3>(2)
     }
 
     /// `[B, M]`: e^(−d / width), d the distance to the nearest observation.
