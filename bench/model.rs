@@ -1,4 +1,4 @@
-//! `cargo bench --bench model`: DMBN and DMBN-PTE on the CPU (burn flex), 64×64 frames.
+//! `cargo bench --bench model`: DMBN, DMBN-PTE and the attentive model on the CPU (burn flex), 64×64 frames.
 //! Medians over repetitions of: one training step (8 sequences × 5 contexts × 4 targets:
 //! forward, backward, Adam), inference of one target from 5 contexts, and of a 100-step
 //! sequence from 5 contexts (encode once, decode in chunks). `bench/model.sh` runs this next

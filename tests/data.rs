@@ -289,21 +289,28 @@ fn non_numeric_value_is_reported() {
 }
 
 #[test]
-fn fewer_frames_than_rows_is_reported() {
-    let (_root, dir) = written(6, &fixture(3, 8, 0));
-    fs::remove_file(dir.join("2.png")).unwrap();
+fn fewer_frames_than_rows_names_the_missing_frame() {
+    let (_root, dir) = written(6, &fixture(4, 8, 0));
+    fs::remove_file(dir.join("1.png")).unwrap();
+    fs::remove_file(dir.join("3.png")).unwrap();
     let err = read_sequence(&dir, 6, None).unwrap_err();
     assert!(matches!(
         err,
-        DataError::FewerFrames {
-            frames: 2,
-            rows: 3,
+        DataError::MissingFrame {
+            index: 1,
+            missing: 2,
+            rows: 4,
             ..
         }
     ));
     assert_message(
         &err,
-        &[&dir.display().to_string(), "2 frames for 3 joint rows"],
+        &[
+            &dir.display().to_string(),
+            "frame 1 is missing",
+            "1.png",
+            "2 of 4",
+        ],
     );
 }
 

@@ -39,8 +39,7 @@ fn shipped_weights_reproduce_the_golden_prediction() {
 }
 
 /// Every way to make a predictor freezes its kernels (the page and `dmbn predict` load from
-/// bytes or a file: before, only `Predictor::new` froze, and loaded models compared all their
-/// weights on every call).
+/// bytes or a file; an unfrozen model compares all its weights on every call).
 #[test]
 fn every_predictor_has_frozen_kernels() {
     let from_bytes = Predictor::from_bytes(golden::MODEL).unwrap();

@@ -95,7 +95,7 @@ fn resume_reproduces_the_uninterrupted_run() {
         .unwrap()
         .run(false, |_| {})
         .unwrap();
-    let mut resumed = Trainer::resume(&data, &parts, Some(6)).unwrap();
+    let mut resumed = Trainer::resume(None, &parts, Some(6)).unwrap();
     assert_eq!(resumed.step_count(), 4);
     resumed.run(false, |_| {}).unwrap();
 
@@ -199,6 +199,33 @@ fn non_finite_loss_stops_and_keeps_the_last_checkpoint() {
 }
 
 #[test]
+fn the_drawn_frame_weight_trains_the_attentive_model_s_own_frame_and_nothing_else() {
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("data");
+    dataset(&data, 1);
+    let seq = episode(Action::Move, 9, 64).unwrap();
+    let observations = Observations::from_sequence(&seq, &[10, 50]).unwrap();
+    for (model, moves) in [(ModelKind::Attn, true), (ModelKind::Dmbn, false)] {
+        let run = |weight: f64| {
+            let out = tmp.path().join(format!("{}-{weight}", model.name()));
+            let mut config = small(model, 2);
+            config.drawn_frame_weight = weight;
+            new_trainer(&data, &out, config)
+                .unwrap()
+                .run(false, |_| {})
+                .unwrap();
+            Predictor::load(out.join("model.dmbn"))
+                .unwrap()
+                .predict(&observations, &seq.times(), 0.5)
+                .unwrap()
+        };
+        let (without, with) = (run(0.0), run(50.0));
+        // Only the attentive model draws a frame of its own for the term to train.
+        assert_eq!(without != with, moves, "{}", model.name());
+    }
+}
+
+#[test]
 fn bad_settings_are_refused() {
     let tmp = tempfile::tempdir().unwrap();
     let data = tmp.path().join("data");
@@ -219,11 +246,15 @@ fn bad_settings_are_refused() {
     config.prefix_contexts = -0.1;
     let err = new_trainer(&data, &out, config).err().unwrap();
     assert!(err.to_string().contains("prefix_contexts"), "{err}");
+    let mut config = small(ModelKind::Attn, 5);
+    config.drawn_frame_weight = f64::NAN;
+    let err = new_trainer(&data, &out, config).err().unwrap();
+    assert!(err.to_string().contains("drawn_frame_weight"), "{err}");
     let err = new_trainer(&tmp.path().join("missing"), &out, small(ModelKind::Dmbn, 5))
         .err()
         .unwrap();
     assert!(err.to_string().contains("missing"), "{err}");
-    let err = Trainer::resume(&data, &tmp.path().join("nothing"), None)
+    let err = Trainer::resume(Some(&data), &tmp.path().join("nothing"), None)
         .err()
         .unwrap();
     assert!(err.to_string().contains("no checkpoint"), "{err}");

@@ -4,8 +4,8 @@ use rand_pcg::Pcg64;
 use super::time_warp::gather;
 use crate::data::Sequence;
 
-/// The paper's evaluation sequences (§4): what a model is shown, and the time stamp of every
-/// step. Targets are the shown sequence itself: a model that understands time follows it.
+/// The paper's evaluation sequences (§3, "Model Evaluation"): what a model is shown, and the
+/// time stamp of every step. Targets are the shown sequence itself: a model that understands time follows it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum EvalMode {
     /// `t`: the sequence unchanged.

@@ -15,12 +15,15 @@ pub enum DataError {
         source: io::Error,
     },
     #[error(
-        "{}: frame {index} is missing: expected {index}.png or {index}.jpeg, one frame per joint row ({rows} rows)",
+        "{}: frame {index} is missing: expected {index}.png or {index}.jpeg, one frame per joint row ({missing} of {rows} missing)",
         dir.display()
     )]
     MissingFrame {
         dir: PathBuf,
+        /// The first missing step.
         index: usize,
+        /// How many of the steps have no frame.
+        missing: usize,
         rows: usize,
     },
     #[error("{}: no sequence {id}/{action}: the dataset holds ids {ids} with actions {actions}", root.display())]
@@ -65,15 +68,6 @@ pub enum DataError {
     },
     #[error("{}: no rows: expected at least one step", path.display())]
     NoRows { path: PathBuf },
-    #[error(
-        "{}: {frames} frames for {rows} joint rows: expected at least one frame per row",
-        dir.display()
-    )]
-    FewerFrames {
-        dir: PathBuf,
-        frames: usize,
-        rows: usize,
-    },
     #[error("{}: {found} rows, expected {expected} as in {}", path.display(), reference.display())]
     RowMismatch {
         path: PathBuf,

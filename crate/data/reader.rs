@@ -147,25 +147,18 @@ fn frame_paths(dir: &Path, rows: usize) -> Result<Vec<PathBuf>, DataError> {
             })
             .or_insert((pref, path));
     }
-    if found.len() < rows {
-        return Err(DataError::FewerFrames {
+    let missing: Vec<usize> = (0..rows).filter(|i| !found.contains_key(i)).collect();
+    if let Some(&index) = missing.first() {
+        return Err(DataError::MissingFrame {
             dir: dir.to_path_buf(),
-            frames: found.len(),
+            index,
+            missing: missing.len(),
             rows,
         });
     }
-    (0..rows)
-        .map(|index| {
-            found
-                .remove(&index)
-                .map(|(_, p)| p)
-                .ok_or_else(|| DataError::MissingFrame {
-                    dir: dir.to_path_buf(),
-                    index,
-                    rows,
-                })
-        })
-        .collect()
+    Ok((0..rows)
+        .filter_map(|index| found.remove(&index).map(|(_, p)| p))
+        .collect())
 }
 
 /// Decode one frame (format from its content) as RGB8.

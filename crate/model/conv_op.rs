@@ -3,9 +3,8 @@
 //! activation) and 2×2 max pooling on channels-last `[K, H, W, C]` tensors, and the copy of
 //! the heads' channels to channels-first frames.
 //!
-//! burn flex's differentiable `conv2d` spends three quarters of a training step in its
-//! convolutions and their gradients (one frame at a time, and the decoder convolves every
-//! upsampled map in full). These run forward on the inference kernels of
+//! burn flex's differentiable `conv2d` is where a training step would spend most of its time
+//! (one frame at a time, and the decoder convolves every upsampled map in full). These run forward on the inference kernels of
 //! [`FeatureMap`](super::FeatureMap) and backward on the same patches and products transposed
 //! ([`Kernels::input_gradient`], [`Kernels::weight_gradients`]), so training and inference share
 //! one implementation. Native only: wasm has no autodiff.

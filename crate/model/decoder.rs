@@ -63,12 +63,13 @@ impl Decoder {
         let [b, m, _] = x.dims();
         let x = self.shared_layer(x);
         let (image_start, joint_start) = start.map(|s| (s.frames(), s.joints())).unzip();
-        let (image_mean, image_sigma) = self.image.forward(x.clone(), image_start);
+        let frames = self.image.forward(x.clone(), image_start);
         let (joint_mean, joint_sigma) = self.joint.forward(x, joint_start);
-        let [_, c, h, w] = image_mean.dims();
+        let [_, c, h, w] = frames.mean.dims();
         Prediction {
-            image_mean: image_mean.reshape([b, m, c, h, w]),
-            image_sigma: image_sigma.reshape([b, m, c, h, w]),
+            image_mean: frames.mean.reshape([b, m, c, h, w]),
+            image_sigma: frames.sigma.reshape([b, m, c, h, w]),
+            image_drawn: frames.drawn.map(|d| d.reshape([b, m, c, h, w])),
             joint_mean: joint_mean.reshape([b, m, 7]),
             joint_sigma: joint_sigma.reshape([b, m, 7]),
         }

@@ -182,8 +182,9 @@ const START_FEATURES: usize = 9;
 const JOINT_CORRECTION_SCALE: f64 = 0.1;
 
 /// A decoder whose joint mean head starts small (a residual branch near nothing; exactly
-/// zero would starve the layers below it of gradient) and whose image gate starts open: a
-/// fresh model predicts about the interpolated observations, and learns the correction.
+/// zero would starve the layers below it of gradient): a fresh model predicts about the
+/// interpolated joints, and learns the correction. (Its image gate starts half open: the image
+/// decoder's `GATE_BIAS`.)
 fn starting_at_the_observations(mut decoder: Decoder) -> Decoder {
     let weight = decoder
         .joint

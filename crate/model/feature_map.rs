@@ -146,7 +146,7 @@ impl Kernels {
 }
 
 /// Prepared convolutions kept by an image network, one slot per layer: preparing the kernels
-/// costs about a tenth of a decode, so they are prepared once and reused while the weights
+/// is costly next to a decode, so they are prepared once and reused while the weights
 /// they came from stay the same: compared exactly on each use (training or loading other
 /// weights prepares them anew) unless the owner has promised, with
 /// [`KernelCache::freeze`], that they never change. A copy of the network (a clone, as burn
@@ -166,8 +166,8 @@ impl Clone for KernelCache {
 impl KernelCache {
     /// Promises that the network's weights will not change any more (its owner only ever
     /// reads it, as a [`Predictor`](crate::predict::Predictor) does), so prepared kernels are
-    /// reused without comparing the weights: a one-target prediction spends a quarter of its
-    /// time on that comparison otherwise.
+    /// reused without comparing the weights (a cost comparable to a one-target prediction's
+    /// own).
     ///
     /// Kernels prepared before are dropped: they may come from earlier weights.
     pub fn freeze(&self) {
@@ -474,8 +474,8 @@ fn for_each_chunk<T: Send>(out: &mut [T], chunk: usize, f: impl Fn(usize, &mut [
 }
 
 /// A `len`-long vector filled by `f(index, chunk)` over `chunk`-sized pieces (as
-/// [`for_each_chunk`]), each piece zeroed first by the worker that fills it: zeroing all of it
-/// up front took a tenth of a training step, on one thread.
+/// [`for_each_chunk`]), each piece zeroed first by the worker that fills it, not all of it
+/// up front on one thread.
 fn zeroed_chunks(
     len: usize,
     chunk: usize,

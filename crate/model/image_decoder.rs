@@ -60,6 +60,18 @@ pub struct ImageDecoder {
     pub kernels: KernelCache,
 }
 
+/// What an [`ImageDecoder`] returns for K targets, each `[K, 3, S, S]`.
+#[derive(Debug, Clone)]
+pub struct DecodedFrames {
+    /// The mean frame (gated and given a start: mixed with it).
+    pub mean: Tensor<4>,
+    /// σ of every pixel channel.
+    pub sigma: Tensor<4>,
+    /// A gated decoder given a start: the frame it draws itself, before the gate mixes it with
+    /// the start (what `train --drawn-frame-weight` supervises on its own).
+    pub drawn: Option<Tensor<4>>,
+}
+
 impl ImageDecoderConfig {
     /// Builds the decoder.
     pub fn init(&self, device: &Device) -> ImageDecoder {
@@ -100,7 +112,7 @@ impl ImageDecoder {
     /// the inference kernels ([`FeatureMap`]). Both of ours fold each upsampling into the
     /// convolution that reads it. A gated decoder mixes its mean with `start` (the attentive
     /// model's interpolated observations).
-    pub fn forward(&self, x: Tensor<2>, start: Option<FrameStart>) -> (Tensor<4>, Tensor<4>) {
+    pub fn forward(&self, x: Tensor<2>, start: Option<FrameStart>) -> DecodedFrames {
         #[cfg(not(target_arch = "wasm32"))]
         if is_tracked(&x) || is_tracked(&self.mean.weight.val()) {
             let raw = if super::conv_op::supported(&x) {
@@ -197,21 +209,28 @@ impl ImageDecoder {
 
     /// The heads' raw outputs to the mean (sigmoid, mixed with the start by a gated decoder)
     /// and σ frames. A start without a gate, or a gate without a start, leaves the mean alone.
-    fn heads(&self, raw: Vec<Tensor<4>>, start: Option<FrameStart>) -> (Tensor<4>, Tensor<4>) {
+    fn heads(&self, raw: Vec<Tensor<4>>, start: Option<FrameStart>) -> DecodedFrames {
         let mut raw = raw.into_iter();
-        let mean = sigmoid(raw.next().expect("the mean head"));
+        let drawn = sigmoid(raw.next().expect("the mean head"));
         let sigma = bounded_sigma(raw.next().expect("the σ head"), self.sigma_floor);
-        let mean = match (raw.next(), start) {
+        match (raw.next(), start) {
             (Some(gate), Some(start)) => {
                 // Held open at an observed step, learnt away from the observations.
                 let near = start.near;
                 let g =
                     (sigmoid(gate) * near.clone().neg().add_scalar(1.0) + near) * start.observed;
-                start.frames * g.clone() + mean * g.neg().add_scalar(1.0)
+                DecodedFrames {
+                    mean: start.frames * g.clone() + drawn.clone() * g.neg().add_scalar(1.0),
+                    sigma,
+                    drawn: Some(drawn),
+                }
             }
-            _ => mean,
-        };
-        (mean, sigma)
+            _ => DecodedFrames {
+                mean: drawn,
+                sigma,
+                drawn: None,
+            },
+        }
     }
 }
 
@@ -253,7 +272,14 @@ mod tests {
 
     /// The decoder through burn's own layers: what both paths must equal.
     fn reference(decoder: &ImageDecoder, x: Tensor<2>) -> (Tensor<4>, Tensor<4>) {
-        decoder.heads(decoder.forward_burn(x), None)
+        let frames = decoder.heads(decoder.forward_burn(x), None);
+        (frames.mean, frames.sigma)
+    }
+
+    /// Mean and σ of the decoder's own path.
+    fn fast(decoder: &ImageDecoder, x: Tensor<2>) -> (Tensor<4>, Tensor<4>) {
+        let frames = decoder.forward(x, None);
+        (frames.mean, frames.sigma)
     }
 
     #[test]
@@ -262,7 +288,7 @@ mod tests {
         let decoder = decoder(&device);
         let x = Tensor::<2>::random([3, 64], Distribution::Normal(0.0, 1.0), &device);
         let (mean, sigma) = reference(&decoder, x.clone());
-        let (fast_mean, fast_sigma) = decoder.forward(x, None);
+        let (fast_mean, fast_sigma) = fast(&decoder, x);
         assert_eq!(mean.dims(), [3, 3, 16, 16]);
         assert!(diff(mean, fast_mean) < 1e-5);
         assert!(diff(sigma, fast_sigma) < 1e-5);
@@ -290,11 +316,14 @@ mod tests {
                 observed: Tensor::<1>::from_floats([1.0, 0.0], &device).reshape([2, 1, 1, 1]),
                 near: Tensor::<1>::from_floats([0.3, 0.3], &device).reshape([2, 1, 1, 1]),
             };
-            let (want, _) = decoder.heads(decoder.forward_burn(x.clone()), Some(start.clone()));
-            let (got, _) = decoder.forward(x.clone(), Some(start));
-            assert!(diff(want.clone(), got) < 1e-5);
+            let want = decoder.heads(decoder.forward_burn(x.clone()), Some(start.clone()));
+            let got = decoder.forward(x.clone(), Some(start));
+            assert!(diff(want.mean.clone(), got.mean) < 1e-5);
+            // The drawn frame is the mean a decoder without a start returns.
+            let (alone, _) = fast(&decoder, x);
+            assert!(diff(got.drawn.expect("a drawn frame"), alone.clone()) < 1e-6);
             // The unobserved target ignores the start; the observed one does not.
-            let (alone, _) = decoder.forward(x, None);
+            let want = want.mean;
             let row = |t: Tensor<4>, i: usize| t.narrow(0, i, 1);
             assert!(diff(row(want.clone(), 1), row(alone.clone(), 1)) < 1e-6);
             assert!(diff(row(want, 0), row(alone, 0)) > 0.01);
@@ -309,7 +338,7 @@ mod tests {
         let decoder = decoder(&device);
         let x = Tensor::<2>::random([2, 64], Distribution::Normal(0.0, 1.0), &device);
         assert!(!super::super::conv_op::supported(&x));
-        let (mean, sigma) = decoder.forward(x.clone(), None);
+        let (mean, sigma) = fast(&decoder, x.clone());
         let (ref_mean, ref_sigma) = reference(&decoder, x);
         assert!(diff(mean.clone().inner(), ref_mean.inner()) < 1e-6);
         assert!(diff(sigma.inner(), ref_sigma.inner()) < 1e-6);
@@ -323,7 +352,7 @@ mod tests {
         let decoder = decoder(&device);
         let x =
             Tensor::<2>::random([2, 64], Distribution::Normal(0.0, 1.0), &device).require_grad();
-        let (mean, sigma) = decoder.forward(x.clone(), None);
+        let (mean, sigma) = fast(&decoder, x.clone());
         let (ref_mean, ref_sigma) = reference(&decoder, x.clone());
         assert!(diff(mean.clone().inner(), ref_mean.clone().inner()) < 1e-5);
         assert!(diff(sigma.clone().inner(), ref_sigma.clone().inner()) < 1e-5);

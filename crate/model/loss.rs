@@ -124,6 +124,7 @@ mod tests {
         let prediction = Prediction {
             image_mean: Tensor::full([1, 1, 3, 2, 2], 0.5, &device),
             image_sigma: Tensor::full([1, 1, 3, 2, 2], 0.1, &device),
+            image_drawn: None,
             joint_mean: Tensor::zeros([1, 1, 7], &device),
             joint_sigma: Tensor::ones([1, 1, 7], &device),
         };

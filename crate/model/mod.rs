@@ -54,7 +54,7 @@ pub use feature_map::{new_conv3x3, Activation, FeatureMap, KernelCache, Kernels}
 pub use file::{load, load_expecting, save};
 pub use file::{load_bytes, load_bytes_expecting, read_header, save_bytes, ModelHeader};
 pub use gaussian::bounded_sigma;
-pub use image_decoder::{upsample2, ImageDecoder, ImageDecoderConfig};
+pub use image_decoder::{upsample2, DecodedFrames, ImageDecoder, ImageDecoderConfig};
 pub use image_encoder::{ImageEncoder, ImageEncoderConfig};
 pub use interpolation::{gaps, interpolation_tensors, linear_weights};
 pub use joint_decoder::{JointDecoder, JointDecoderConfig};

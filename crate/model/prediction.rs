@@ -82,6 +82,9 @@ pub struct Prediction {
     pub image_mean: Tensor<5>,
     /// `[B, M, 3, S, S]`: σ of every pixel channel.
     pub image_sigma: Tensor<5>,
+    /// `[B, M, 3, S, S]`: the attentive model's own frame before its gate mixes it with the
+    /// observed ones (see [`DecodedFrames`](super::DecodedFrames)); none for the others.
+    pub image_drawn: Option<Tensor<5>>,
     /// `[B, M, 7]`: mean joints, normalised.
     pub joint_mean: Tensor<3>,
     /// `[B, M, 7]`: σ of every joint, in normalised units.

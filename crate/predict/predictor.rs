@@ -15,8 +15,8 @@ pub struct Predictor {
 }
 
 impl Predictor {
-    /// Target times decoded per forward pass: bounds memory (a 128 px chunk is ~50 MB of
-    /// activations) while keeping the matrix products large enough to be efficient.
+    /// Target times decoded per forward pass: bounds the activations' memory (at 128 px
+    /// too) while keeping the matrix products large enough to be efficient.
     pub const CHUNK: usize = 25;
 
     /// A predictor for `model`, which must live on `Device::flex()`, trained with `normalization`.
@@ -67,7 +67,8 @@ impl Predictor {
         &self.normalization
     }
 
-    /// The blended representation of `observations` with blending coefficient `blend`
+    /// What the decoders condition on (see [`Representation`]) for `observations` with
+    /// blending coefficient `blend`
     /// (1 = images only, 0 = joints only).
     pub fn encode(
         &self,

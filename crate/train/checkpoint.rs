@@ -25,6 +25,10 @@ pub struct CheckpointState {
     /// Best validation quality score so far (`best.dmbn`), and its step.
     #[serde(default)]
     pub best_quality: Option<(u64, f32)>,
+    /// The dataset root the run trains on, so that `--resume` needs no `--data` (none in
+    /// checkpoints written before it was recorded).
+    #[serde(default)]
+    pub data: Option<PathBuf>,
 }
 
 /// A checkpoint folder: `model.dmbn` (model file, f32), `optimizer.bpk` (Adam state),

@@ -73,6 +73,11 @@ pub struct TrainConfig {
     pub clip_norm: f32,
     /// Weight of the joint NLL in the loss.
     pub joint_weight: f64,
+    /// The attentive model: weight of the mean squared error of the frame it draws, before its
+    /// gate mixes it with the observed ones (through the gate it learns only where the gate is
+    /// shut, and a forecast far from the observations needs it everywhere); 0 for none.
+    #[serde(default)]
+    pub drawn_frame_weight: f64,
     /// Lower bound of the predicted σ.
     pub sigma_floor: f64,
     /// Fraction of sequence ids held out for validation.
@@ -111,6 +116,7 @@ impl TrainConfig {
             schedule: Schedule::Constant,
             clip_norm: 1.0,
             joint_weight: 0.01,
+            drawn_frame_weight: 0.0,
             sigma_floor: 0.01,
             val_fraction: 0.1,
             val_every: 200,

@@ -37,7 +37,8 @@ impl TrainError {
         }
     }
 
-    pub(crate) fn config(field: &'static str, message: impl Into<String>) -> TrainError {
+    /// A bad or missing setting `field`.
+    pub fn config(field: &'static str, message: impl Into<String>) -> TrainError {
         TrainError::Config {
             field,
             message: message.into(),

@@ -21,9 +21,6 @@ use super::{
 /// Separate random streams: validation batches never shift the training stream.
 const VAL_STREAM: u64 = 0x5851_F42D_4C95_7F2D;
 
-/// The step and value of the best validation so far.
-type Best = Option<(u64, f32)>;
-
 /// What the progress display shows after each step.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Progress {
@@ -50,6 +47,8 @@ pub struct Trainer {
     best_val: Option<(u64, f32)>,
     /// Best [`ValQuality::score`] so far and its step: the model in `out/best.dmbn`.
     best_quality: Option<(u64, f32)>,
+    /// The dataset root, recorded in checkpoints.
+    data: Option<PathBuf>,
     device: Device,
 }
 
@@ -72,71 +71,76 @@ impl Trainer {
         let model = model_config(&config).init(&device)?;
         model.draw_weights();
         let log = MetricsLog::open(&out.join("metrics.jsonl"), Some(0))?;
-        let rng = Pcg64::seed_from_u64(config.seed);
         let optim = optimizer(&config);
-        Ok(Self::assemble(
+        let state = CheckpointState {
+            step: 0,
+            rng: Pcg64::seed_from_u64(config.seed),
             config,
-            out,
-            model,
-            optim,
-            rng,
-            0,
-            split,
             normalization,
-            log,
-            (None, None),
-            device,
-        ))
+            best_val: None,
+            best_quality: None,
+            data: Some(std::path::absolute(data).unwrap_or_else(|_| data.to_path_buf())),
+        };
+        Ok(Self::assemble(state, out, model, optim, split, log, device))
     }
 
-    /// Continue the run in `out` from its last checkpoint, with the same settings; `steps`
-    /// may extend the run.
-    pub fn resume(data: &Path, out: &Path, steps: Option<u64>) -> Result<Trainer, TrainError> {
-        let (model_bytes, optim_bytes, state) = Checkpoint::read(out)?;
-        let mut config = state.config;
+    /// Continue the run in `out` from its last checkpoint, with the same settings, on `data`
+    /// or (none given) the dataset the checkpoint names; `steps` may extend the run.
+    pub fn resume(
+        data: Option<&Path>,
+        out: &Path,
+        steps: Option<u64>,
+    ) -> Result<Trainer, TrainError> {
+        let (model_bytes, optim_bytes, mut state) = Checkpoint::read(out)?;
         if let Some(steps) = steps {
-            config.steps = steps;
+            state.config.steps = steps;
         }
-        validate(&config)?;
-        let split = Split::load(data, config.image_size, config.val_fraction)?;
+        validate(&state.config)?;
+        let data = match data {
+            Some(data) => data.to_path_buf(),
+            None => state.data.clone().ok_or_else(|| {
+                TrainError::config(
+                    "data",
+                    format!(
+                        "missing: the checkpoint in {} does not name its dataset (written before checkpoints did): pass --data",
+                        out.display()
+                    ),
+                )
+            })?,
+        };
+        let split = Split::load(&data, state.config.image_size, state.config.val_fraction)?;
+        state.data = Some(data);
         let device = training_device();
         let (model, _, _) = model::load_bytes(&model_bytes, &device)?;
-        let optim = optimizer(&config)
+        let optim = optimizer(&state.config)
             .from_bytes(Bytes::from_bytes_vec(optim_bytes))
             .map_err(|e| TrainError::Checkpoint {
                 path: Checkpoint::dir(out),
                 message: format!("optimizer.bpk: {e:?}"),
             })?;
         let log = MetricsLog::open(&out.join("metrics.jsonl"), Some(state.step))?;
-        Ok(Self::assemble(
-            config,
-            out,
-            model,
-            optim,
-            state.rng,
-            state.step,
-            split,
-            state.normalization,
-            log,
-            (state.best_val, state.best_quality),
-            device,
-        ))
+        Ok(Self::assemble(state, out, model, optim, split, log, device))
     }
 
-    #[allow(clippy::too_many_arguments)]
+    /// A trainer from where a run stands (a fresh run's state at step 0, or a checkpoint's).
     fn assemble(
-        config: TrainConfig,
+        state: CheckpointState,
         out: &Path,
         model: Model,
         optim: ModuleOptimizer,
-        rng: Pcg64,
-        step: u64,
         split: Split,
-        normalization: Normalization,
         log: MetricsLog,
-        (best_val, best_quality): (Best, Best),
         device: Device,
     ) -> Trainer {
+        let CheckpointState {
+            step,
+            rng,
+            config,
+            normalization,
+            best_val,
+            best_quality,
+            data,
+        } = state;
         let plain = SamplerConfig {
             batch: config.batch,
             max_contexts: config.max_contexts,
@@ -176,6 +180,7 @@ impl Trainer {
             log,
             best_val,
             best_quality,
+            data,
             device,
         }
     }
@@ -188,6 +193,11 @@ impl Trainer {
     /// The run's settings.
     pub fn config(&self) -> &TrainConfig {
         &self.config
+    }
+
+    /// The dataset root the run trains on.
+    pub fn data(&self) -> Option<&Path> {
+        self.data.as_deref()
     }
 
     /// Held-out sequence ids.
@@ -206,6 +216,12 @@ impl Trainer {
             .model
             .decode(&representation, batch.target_times.clone())?;
         let mut loss = self.model.loss(&prediction, &batch)?;
+        if let (Some(drawn), Some(frames)) = (&prediction.image_drawn, &batch.target_images) {
+            if self.config.drawn_frame_weight > 0.0 {
+                let mse = (drawn.clone() - frames.clone()).square().mean();
+                loss.total = loss.total + mse.mul_scalar(self.config.drawn_frame_weight);
+            }
+        }
         if joint_targets.targets > 0 {
             let (times, joints) = joint_target_tensors(&joint_targets, &self.device)?;
             let (mean, sigma) = self.model.decode_joints(&representation, times)?;
@@ -385,6 +401,7 @@ impl Trainer {
             normalization: self.normalization,
             best_val: self.best_val,
             best_quality: self.best_quality,
+            data: self.data.clone(),
         };
         Checkpoint::write(&self.out, &model_bytes, &optim_bytes, &state)
     }
@@ -433,6 +450,13 @@ fn validate(config: &TrainConfig) -> Result<(), TrainError> {
         return Err(TrainError::config(
             "lr",
             format!("{}: expected a positive number", config.lr),
+        ));
+    }
+    let weight = config.drawn_frame_weight;
+    if !(weight.is_finite() && weight >= 0.0) {
+        return Err(TrainError::config(
+            "drawn_frame_weight",
+            format!("{weight}: expected a finite value >= 0"),
         ));
     }
     if !(config.clip_norm.is_finite() && config.clip_norm > 0.0) {

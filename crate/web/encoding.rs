@@ -4,7 +4,8 @@ use wasm_bindgen::prelude::*;
 use crate::model::Representation;
 use crate::predict::SequencePrediction;
 
-/// Observations encoded by `Model.encode`: the blended representation r, with the model that
+/// Observations encoded by `Model.encode`: what the decoders are conditioned on (the blended
+/// representation r, or the contexts the attentive model attends to), with the model that
 /// made it (an id), so that it is only ever decoded by that model.
 #[wasm_bindgen]
 pub struct Encoding {

@@ -31,12 +31,13 @@ enum ScheduleArg {
 #[derive(Parser)]
 #[command(name = "train", version)]
 struct Args {
-    /// Dataset root in the DMBN layout (ours or the original).
-    #[arg(long)]
-    data: PathBuf,
-    /// Which network.
-    #[arg(long, value_enum)]
-    model: Kind,
+    /// Dataset root in the DMBN layout (ours or the original); with --resume, the run's own
+    /// unless given.
+    #[arg(long, required_unless_present = "resume")]
+    data: Option<PathBuf>,
+    /// Which network (with --resume, the checkpoint's: may be left out).
+    #[arg(long, value_enum, required_unless_present = "resume")]
+    model: Option<Kind>,
     /// Output folder for metrics, checkpoints and the final model.
     #[arg(long)]
     out: PathBuf,
@@ -88,6 +89,11 @@ struct Args {
     /// Weight of the joint NLL in the loss (the original's 0.01).
     #[arg(long, default_value_t = 0.01)]
     joint_weight: f64,
+    /// The attentive model: weight of the mean squared error of the frame it draws before its
+    /// gate mixes it with the observed ones, so that it learns to draw everywhere, not only
+    /// where the gate is shut (forecasting far from the observations needs it).
+    #[arg(long, default_value_t = 0.0)]
+    drawn_frame_weight: f64,
     /// Lower bound of every predicted σ.
     #[arg(long, default_value_t = 0.01)]
     sigma_floor: f64,
@@ -130,17 +136,36 @@ pub fn main() -> ExitCode {
 }
 
 fn run(args: Args) -> Result<(), TrainError> {
+    let model = args.model.map(|kind| match kind {
+        Kind::Dmbn => ModelKind::Dmbn,
+        Kind::Pte => ModelKind::Pte,
+        Kind::Attn => ModelKind::Attn,
+    });
     let mut trainer = if args.resume {
-        Trainer::resume(&args.data, &args.out, args.steps)?
+        let trainer = Trainer::resume(args.data.as_deref(), &args.out, args.steps)?;
+        let trained = trainer.config().model;
+        if model.is_some_and(|m| m != trained) {
+            return Err(TrainError::config(
+                "model",
+                format!(
+                    "the checkpoint in {} trains {trained}, not {}: leave --model out to resume it",
+                    args.out.display(),
+                    model.map_or(String::new(), |m| m.to_string())
+                ),
+            ));
+        }
+        trainer
     } else {
         let steps = args.steps.ok_or_else(|| TrainError::Config {
             field: "steps",
             message: "missing: pass --steps N".into(),
         })?;
-        let model = match args.model {
-            Kind::Dmbn => ModelKind::Dmbn,
-            Kind::Pte => ModelKind::Pte,
-            Kind::Attn => ModelKind::Attn,
+        // Both are required unless resuming (clap checks).
+        let (Some(model), Some(data)) = (model, args.data.as_deref()) else {
+            return Err(TrainError::config(
+                "model",
+                "missing: pass --model and --data",
+            ));
         };
         let mut config = TrainConfig::new(model, steps, args.seed);
         config.batch = args.batch;
@@ -164,13 +189,14 @@ fn run(args: Args) -> Result<(), TrainError> {
         };
         config.clip_norm = args.clip_norm;
         config.joint_weight = args.joint_weight;
+        config.drawn_frame_weight = args.drawn_frame_weight;
         config.sigma_floor = args.sigma_floor;
         config.val_fraction = args.val_fraction;
         config.val_every = args.val_every;
         config.checkpoint_every = args.checkpoint_every;
         config.quality_sequences = args.quality_sequences;
         config.augment = args.augment.then(TimeWarpConfig::default);
-        Trainer::new(&args.data, &args.out, config)?
+        Trainer::new(data, &args.out, config)?
     };
     let steps = trainer.config().steps;
     let bar = ProgressBar::new(steps).with_position(trainer.step_count());
@@ -181,10 +207,12 @@ fn run(args: Args) -> Result<(), TrainError> {
         .expect("valid template"),
     );
     eprintln!(
-        "training {} on {} (validation ids {:?}), output in {}",
+        "training {} on {} (validation ids {}), output in {}",
         trainer.config().model,
-        args.data.display(),
-        trainer.val_ids(),
+        trainer
+            .data()
+            .map_or("?".into(), |d| d.display().to_string()),
+        id_ranges(trainer.val_ids()),
         args.out.display()
     );
     let path = trainer.run(args.half, |p| {
@@ -204,4 +232,26 @@ fn run(args: Args) -> Result<(), TrainError> {
         );
     }
     Ok(())
+}
+
+/// Sorted ids as ranges, `1800-1999` or `3, 7-9`.
+fn id_ranges(ids: &[u32]) -> String {
+    let mut ranges: Vec<(u32, u32)> = Vec::new();
+    for &id in ids {
+        match ranges.last_mut() {
+            Some((_, last)) if id == *last + 1 => *last = id,
+            _ => ranges.push((id, id)),
+        }
+    }
+    let parts: Vec<String> = ranges
+        .iter()
+        .map(|&(a, b)| {
+            if a == b {
+                a.to_string()
+            } else {
+                format!("{a}-{b}")
+            }
+        })
+        .collect();
+    parts.join(", ")
 }

@@ -1,4 +1,4 @@
-//! `train`: trains DMBN or DMBN-PTE on a dataset in the DMBN layout. Thin on purpose:
+//! `train`: trains DMBN, DMBN-PTE or the attentive model on a dataset in the DMBN layout. Thin on purpose:
 //! argument parsing and progress here, the work in `dmbn::train`. Native only: on wasm32
 //! (where `wasm-pack test` also builds binaries) it is an empty program.
 #[cfg(not(target_arch = "wasm32"))]
