@@ -105,7 +105,7 @@ impl ModelConfig {
         Ok(())
     }
 
-    /// Heads of the attentive model's attention: `heads`, [`ATTENTION_HEADS`] by default.
+    /// Heads of the attentive model's attention: `heads`, `ATTENTION_HEADS` (8) by default.
     pub fn attention_heads(&self) -> usize {
         self.heads.unwrap_or(ATTENTION_HEADS)
     }

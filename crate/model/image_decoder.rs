@@ -107,8 +107,8 @@ impl ImageDecoderConfig {
 
 impl ImageDecoder {
     /// `[K, input]` to the mean and σ frames, each `[K, 3, S, S]` with S = 2^(blocks + 1):
-    /// through the differentiable operations of [`conv_op`](super::conv_op) when training (see
-    /// [`is_tracked`]; through burn's layers on other backends than flex), else straight through
+    /// through the differentiable operations of `conv_op` when training (see
+    /// `is_tracked`; through burn's layers on other backends than flex), else straight through
     /// the inference kernels ([`FeatureMap`]). Both of ours fold each upsampling into the
     /// convolution that reads it. A gated decoder mixes its mean with `start` (the attentive
     /// model's interpolated observations).

@@ -59,8 +59,8 @@ impl ImageEncoderConfig {
 
 impl ImageEncoder {
     /// `[K, C, S, S]` frames (S = 2^(blocks + 1)) to `[K, H]` encodings: through the
-    /// differentiable operations of [`conv_op`](super::conv_op) when training (see
-    /// [`is_tracked`]; through burn's layers on other backends than flex), else straight through
+    /// differentiable operations of `conv_op` when training (see
+    /// `is_tracked`; through burn's layers on other backends than flex), else straight through
     /// the inference kernels ([`FeatureMap`]).
     pub fn forward(&self, images: Tensor<4>) -> Tensor<2> {
         #[cfg(not(target_arch = "wasm32"))]

@@ -3,7 +3,7 @@
 //! [`ContextProjection`]) → set average and blending ([`masked_mean`], [`blend`]) → target
 //! time → [`Decoder`] ([`ImageDecoder`], [`JointDecoder`]) → mean and σ ([`Prediction`]),
 //! scored by [`gaussian_loss`]. [`Model`] wraps either network with its [`ModelConfig`], and
-//! [`file`] stores it with its [`Normalization`] in one self-describing file.
+//! [`file`](mod@file) stores it with its [`Normalization`] in one self-describing file.
 //!
 //! Nothing here knows about datasets or files on disk beyond the model file; a [`Batch`]
 //! (plain arrays from the sampler) becomes [`BatchTensors`] through [`tensors`].
