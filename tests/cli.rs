@@ -2,7 +2,7 @@
 use std::fs;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use dmbn::data::{joint_path, DatasetWriter, Sequence};
 
@@ -210,26 +210,91 @@ fn simulate_refuses_a_non_empty_output() {
     assert_eq!(fs::read_dir(tmp.path()).unwrap().count(), 1);
 }
 
+/// The sequence folders (`<id>/<action>`) under `root` that are completely written: the
+/// writer writes `endpoint_<id>.txt` last.
+fn written_sequences(root: &Path) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    for id in fs::read_dir(root).into_iter().flatten().flatten() {
+        for action in fs::read_dir(id.path()).into_iter().flatten().flatten() {
+            let name = id.file_name().to_string_lossy().into_owned();
+            if action.path().join(format!("endpoint_{name}.txt")).exists() {
+                out.push(action.path().strip_prefix(root).unwrap().to_path_buf());
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
 #[test]
 fn interrupted_simulate_leaves_no_dataset() {
     let tmp = tempfile::tempdir().unwrap();
     let out_dir = tmp.path().join("data");
+    // Far more sequences than get written before the kill: the run is always interrupted.
     let mut child = Command::new(env!("CARGO_BIN_EXE_dmbn"))
         .args(["simulate", "--out", out_dir.to_str().unwrap()])
-        .args(["--sequences", "40", "--seed", "7", "--jobs", "1"])
+        .args(["--sequences", "1000", "--seed", "7", "--jobs", "1"])
         .stdout(std::process::Stdio::null())
         .stderr(std::process::Stdio::null())
         .spawn()
         .unwrap();
-    std::thread::sleep(Duration::from_millis(300));
-    let finished = child.try_wait().unwrap().is_some_and(|s| s.success());
-    let _ = child.kill();
-    let _ = child.wait();
-    if finished {
-        // too fast to interrupt: then the dataset must be complete
-        let out = dmbn(&["inspect", out_dir.to_str().unwrap()]);
-        assert!(out.status.success(), "stderr: {}", text(&out.stderr));
-    } else {
-        assert!(!out_dir.exists(), "a killed run left {}", out_dir.display());
+    // The dataset is built in data.tmp-<pid>: kill the run once a sequence is written there.
+    let building = tmp.path().join(format!("data.tmp-{}", child.id()));
+    let start = Instant::now();
+    while written_sequences(&building).is_empty() {
+        if let Some(status) = child.try_wait().unwrap() {
+            panic!("simulate exited ({status}) before writing a sequence into {building:?}");
+        }
+        assert!(
+            start.elapsed() < Duration::from_secs(120),
+            "no sequence written into {building:?} after 2 minutes"
+        );
+        std::thread::sleep(Duration::from_millis(5));
     }
+    assert!(
+        child.try_wait().unwrap().is_none(),
+        "the run is still going"
+    );
+    child.kill().unwrap();
+    assert!(!child.wait().unwrap().success());
+
+    // Killed mid-run, it left no dataset at --out, only its own temporary folder.
+    assert!(!out_dir.exists(), "a killed run left {}", out_dir.display());
+    let written = written_sequences(&building);
+    assert!(written.contains(&PathBuf::from("0/grasp")), "{written:?}");
+    let names: Vec<_> = fs::read_dir(tmp.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(names, [building.file_name().unwrap()]);
+
+    // That folder does not block a new run to the same --out, which writes the same episodes
+    // (sequence i of seed S is the same in any run), completely.
+    let out = dmbn(&[
+        "simulate",
+        "--out",
+        out_dir.to_str().unwrap(),
+        "--sequences",
+        "1",
+        "--seed",
+        "7",
+        "--jobs",
+        "1",
+    ]);
+    assert!(out.status.success(), "stderr: {}", text(&out.stderr));
+    assert!(text(&out.stdout).contains("wrote 2 sequences"));
+    assert_eq!(
+        written_sequences(&out_dir),
+        [PathBuf::from("0/grasp"), PathBuf::from("0/move")]
+    );
+    for seq in written.iter().filter(|s| s.starts_with("0")) {
+        assert!(
+            tree(&building.join(seq)) == tree(&out_dir.join(seq)),
+            "{} differs from the killed run's",
+            seq.display()
+        );
+    }
+    let out = dmbn(&["inspect", out_dir.to_str().unwrap()]);
+    assert!(out.status.success(), "stderr: {}", text(&out.stderr));
+    assert!(text(&out.stdout).contains("2 sequences, 1 ids"));
 }

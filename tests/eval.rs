@@ -10,9 +10,9 @@ use burn::tensor::Device;
 use dmbn::data::Normalization;
 use dmbn::eval::{
     diverged, evenly_spaced, fit_head, mean_ci95, split_warnings, time_variance, Divergence,
-    Encodings, HeadConfig, ProbeReport, ProbeResult, ProbeRow,
+    Encodings, HeadConfig, ProbeReport, ProbeResult, ProbeRow, DIVERGENCE_FACTOR,
 };
-use dmbn::model::{self, ModelConfig, ModelKind};
+use dmbn::model::{ModelConfig, ModelKind};
 use dmbn::sim::Action;
 use rand::{RngExt, SeedableRng};
 use rand_pcg::Pcg64;
@@ -232,7 +232,7 @@ fn dmbn_eval_and_probe_run_end_to_end() {
     for kind in ModelKind::ALL {
         let path = tmp.path().join(format!("{kind}.dmbn"));
         let m = ModelConfig::new(kind).init(&device).unwrap();
-        model::save(&path, &m, &Normalization::identity(), true).unwrap();
+        support::save_model(&path, &m, &Normalization::identity(), true);
         paths.push(path.to_str().unwrap().to_string());
     }
     let d = data.to_str().unwrap();
@@ -311,12 +311,9 @@ fn dmbn_eval_and_probe_run_end_to_end() {
         String::from_utf8_lossy(&run.stderr)
     );
     let table = std::fs::read_to_string(probe_out.join("probe.md")).unwrap();
-    for row in ["| Null |", "| Random |", "| DMBN |", "| DMBN-PTE |"] {
-        assert!(table.contains(row), "{table}");
-    }
     let json: serde_json::Value =
         serde_json::from_slice(&std::fs::read(probe_out.join("probe.json")).unwrap()).unwrap();
-    assert_eq!(json["rows"][3]["image_mse"].as_array().unwrap().len(), 2);
+    check_probe_numbers(&json, &table, 2);
     // Swapped models are refused with the file named.
     let run = dmbn(&[
         "probe",
@@ -336,6 +333,105 @@ fn dmbn_eval_and_probe_run_end_to_end() {
     );
 }
 
+/// `dmbn probe`'s numbers agree between its files: in probe.json every row (Null, Random,
+/// DMBN, DMBN-PTE, in that order) holds `seeds` finite per-seed MSEs for each modality, its
+/// means and 95% CIs are those of the per-seed values, its diverged heads are the ones above
+/// the divergence limit; probe.md prints exactly those cells ×1e3 to two decimals (⚠ where a
+/// head diverged). The image and joint heads are fitted on different encodings: their MSEs
+/// differ in every row.
+fn check_probe_numbers(json: &serde_json::Value, table: &str, seeds: usize) {
+    let f = |v: &serde_json::Value| v.as_f64().unwrap_or_else(|| panic!("not a number: {v}"));
+    let milli = |v: f64| format!("{:.2}", v * 1e3);
+    let limit = f(&json["divergence_limit"]);
+    assert!(limit > 0.0, "{json}");
+    assert_eq!(json["seeds"].as_u64(), Some(seeds as u64));
+    let lines: Vec<&str> = table.lines().filter(|l| l.starts_with("| ")).collect();
+    let rows = json["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 4, "{json}");
+    assert_eq!(
+        lines.len(),
+        1 + rows.len(),
+        "a header and a line per row: {table}"
+    );
+    for (r, (row, kind)) in rows.iter().zip(ProbeRow::ALL).enumerate() {
+        assert_eq!(row["row"], serde_json::to_value(kind).unwrap());
+        let name = kind.name();
+        let mut cells = Vec::new();
+        let mut per_modality = Vec::new();
+        for modality in ["image", "joint"] {
+            let mses: Vec<f64> = row[format!("{modality}_mse")]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(f)
+                .collect();
+            assert_eq!(mses.len(), seeds, "{name} {modality}: one MSE per seed");
+            assert!(
+                mses.windows(2).all(|w| w[0] != w[1]),
+                "{name} {modality}: every seed fits its own head, yet {mses:?}"
+            );
+            assert!(
+                mses.iter().all(|v| v.is_finite() && *v > 0.0),
+                "{name}: {mses:?}"
+            );
+            let cell = &row[modality];
+            let (mean, ci95) = (f(&cell["mean"]), f(&cell["ci95"]));
+            let expected = mean_ci95(&mses);
+            assert_eq!(cell["n"].as_u64(), Some(seeds as u64));
+            assert!(
+                (mean - expected.mean).abs() <= 1e-12 * expected.mean.abs(),
+                "{name} {modality}: mean {mean} of {mses:?}"
+            );
+            assert!(
+                (ci95 - expected.ci95).abs() <= 1e-9 * expected.ci95.abs().max(1e-12),
+                "{name} {modality}: ci95 {ci95} of {mses:?}"
+            );
+            let diverged: Vec<u64> = row["diverged"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .filter(|d| d["modality"] == modality)
+                .map(|d| d["seed"].as_u64().unwrap())
+                .collect();
+            let above: Vec<u64> = (0..seeds as u64)
+                .filter(|&s| mses[s as usize] > limit)
+                .collect();
+            assert_eq!(diverged, above, "{name} {modality}: diverged heads");
+            cells.push(format!(
+                "{} ({}, {}){}",
+                milli(mean),
+                milli(mean - ci95),
+                milli(mean + ci95),
+                if diverged.is_empty() { "" } else { " ⚠" }
+            ));
+            per_modality.push(mses);
+        }
+        assert_eq!(
+            lines[1 + r],
+            format!("| {name} | {} | {} |", cells[0], cells[1]),
+            "{table}"
+        );
+        assert!(
+            per_modality[0]
+                .iter()
+                .zip(&per_modality[1])
+                .all(|(a, b)| a != b),
+            "{name}: image and joint heads score alike {per_modality:?}: the modality switch \
+             picks the same encodings"
+        );
+    }
+    let var_t = f(&json["test_time_variance"]);
+    assert!(
+        table.contains(&format!(
+            "Var(t) of the {} test steps: {} ×1e-3",
+            json["test_steps"],
+            milli(var_t)
+        )),
+        "{table}"
+    );
+    assert!((limit - DIVERGENCE_FACTOR * var_t).abs() <= 1e-12 * limit);
+}
+
 /// A dataset of grasp episodes with the given ids (simulator seed 40 + id).
 fn write_dataset(root: &std::path::Path, ids: &[u32]) {
     support::simulated_dataset(root, ids.iter().copied(), &[Action::Grasp], 40);
@@ -352,7 +448,7 @@ fn dmbn_probe_tests_on_an_id_range_or_a_second_dataset() {
     for kind in [ModelKind::Dmbn, ModelKind::Pte] {
         let path = tmp.path().join(format!("{kind}.dmbn"));
         let m = ModelConfig::new(kind).init(&device).unwrap();
-        model::save(&path, &m, &Normalization::identity(), true).unwrap();
+        support::save_model(&path, &m, &Normalization::identity(), true);
         paths.push(path.to_str().unwrap().to_string());
     }
     let (d, o) = (data.to_str().unwrap(), other.to_str().unwrap());
@@ -404,10 +500,7 @@ fn dmbn_probe_tests_on_an_id_range_or_a_second_dataset() {
     assert!(j["test_time_variance"].as_f64().unwrap() > 0.05);
     assert!(j["warnings"].as_array().unwrap().len() >= 2, "{j}");
     let md = std::fs::read_to_string(out.join("probe.md")).unwrap();
-    assert!(
-        md.contains("| DMBN-PTE |") && md.contains("Var(t) of the"),
-        "{md}"
-    );
+    check_probe_numbers(&j, &md, 1);
     assert!(
         md.contains("Warnings:") && md.contains("only 1 test id(s)"),
         "{md}"

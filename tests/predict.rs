@@ -6,13 +6,15 @@
 #[path = "golden/prediction.rs"]
 mod golden_prediction;
 
-use std::path::Path;
-use std::process::Command;
+mod support;
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
 
 use burn::tensor::Device;
-use dmbn::data::{DatasetWriter, Normalization};
-use dmbn::model::{self, ModelConfig, ModelError, ModelKind};
-use dmbn::predict::{Observations, Predictor};
+use dmbn::data::{Dataset, DatasetWriter, Normalization, Sequence};
+use dmbn::model::{ModelConfig, ModelError, ModelKind};
+use dmbn::predict::{heat_map, heat_map_rgb, Observations, Predictor, SequencePrediction};
 use dmbn::sim::{episode, Action};
 use golden_prediction as golden;
 
@@ -192,39 +194,46 @@ fn dmbn(args: &[&str]) -> std::process::Output {
         .expect("run dmbn")
 }
 
+/// `dmbn predict --model model` on `seq`, written as sequence 0/grasp of a dataset in
+/// `dir/data`, observed at steps 0, 20 and 40 (`golden::OBSERVE`) with blend 0.5 (the
+/// default, `golden::BLEND`), into `dir/out`: the data and output folders and the run.
+fn predict_grasp(dir: &Path, model: &Path, seq: &Sequence) -> (PathBuf, PathBuf, Output) {
+    let (data, out) = (dir.join("data"), dir.join("out"));
+    let mut writer = DatasetWriter::create(&data).unwrap();
+    writer.write(0, "grasp", seq).unwrap();
+    writer.finish().unwrap();
+    let path = |p: &Path| p.to_str().unwrap().to_string();
+    let run = dmbn(&[
+        "predict",
+        "--model",
+        &path(model),
+        "--data",
+        &path(&data),
+        "--sequence",
+        "0/grasp",
+        "--observe",
+        "0,20,40",
+        "--out",
+        &path(&out),
+    ]);
+    (data, out, run)
+}
+
 #[test]
 fn dmbn_predict_writes_figures_and_scores() {
     let tmp = tempfile::tempdir().unwrap();
-    let data = tmp.path().join("data");
-    let mut writer = DatasetWriter::create(&data).unwrap();
-    writer
-        .write(0, "grasp", &episode(Action::Grasp, 11, 64).unwrap())
-        .unwrap();
-    writer.finish().unwrap();
     let model_path = tmp.path().join("model.dmbn");
     let device = Device::flex();
     let model = ModelConfig::new(ModelKind::Dmbn).init(&device).unwrap();
-    model::save(&model_path, &model, &Normalization::identity(), true).unwrap();
-    let out = tmp.path().join("out");
+    support::save_model(&model_path, &model, &Normalization::identity(), true);
+    let seq = episode(Action::Grasp, 11, 64).unwrap();
+    let (data, out, run) = predict_grasp(tmp.path(), &model_path, &seq);
     let (m, d, o) = (
         model_path.to_str().unwrap(),
         data.to_str().unwrap(),
         out.to_str().unwrap(),
     );
 
-    let run = dmbn(&[
-        "predict",
-        "--model",
-        m,
-        "--data",
-        d,
-        "--sequence",
-        "0/grasp",
-        "--observe",
-        "0,20,40",
-        "--out",
-        o,
-    ]);
     let stdout = String::from_utf8_lossy(&run.stdout);
     assert!(
         run.status.success(),
@@ -235,7 +244,7 @@ fn dmbn_predict_writes_figures_and_scores() {
         stdout.contains("image: MSE") && stdout.contains("NLL"),
         "{stdout}"
     );
-    let steps = episode(Action::Grasp, 11, 64).unwrap().len();
+    let steps = seq.len();
     for dir in ["mean", "sigma", "truth"] {
         assert_eq!(
             std::fs::read_dir(out.join(dir)).unwrap().count(),
@@ -341,4 +350,70 @@ fn dmbn_predict_writes_figures_and_scores() {
         ],
         d,
     );
+}
+
+/// The σ heat maps the page draws for a prediction are the images `dmbn predict` writes for
+/// it: the same scale (the largest pixel σ, which the page takes over the chunks its workers
+/// decode, 10 steps each) and the same ramp (`heat_map`, the page's `heatMap`).
+#[test]
+fn the_page_and_dmbn_predict_draw_the_same_sigma_heat_maps() {
+    let tmp = tempfile::tempdir().unwrap();
+    let model = tmp.path().join("model.dmbn");
+    std::fs::write(&model, golden::MODEL).unwrap();
+    let (data, out, run) = predict_grasp(
+        tmp.path(),
+        &model,
+        &episode(Action::Grasp, golden::SEED, 64).unwrap(),
+    );
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    // The sequence as `dmbn predict` reads it.
+    let data = Dataset::open(&data).unwrap();
+    let seq = data.read(data.find(0, "grasp").unwrap(), None).unwrap();
+
+    let predictor = Predictor::from_bytes(golden::MODEL).unwrap();
+    let observations = Observations::from_sequence(&seq, &golden::OBSERVE).unwrap();
+    let whole = predictor
+        .predict(&observations, &seq.times(), golden::BLEND)
+        .unwrap();
+    // The page: www/worker.js decodes chunks, www/prediction.js keeps the largest σ so far,
+    // www/draw.js colours each step's pixel σ with wasm's `heatMap`.
+    let encoding = predictor.encode(&observations, golden::BLEND).unwrap();
+    let chunks: Vec<SequencePrediction> = seq
+        .times()
+        .chunks(10)
+        .map(|times| predictor.decode(&encoding, times).unwrap())
+        .collect();
+    let max = whole.max_image_sigma();
+    let maxima = chunks.iter().map(SequencePrediction::max_image_sigma);
+    let scale = golden::page_scale(maxima, max, 1e-5);
+    let sigma: Vec<f32> = chunks.iter().flat_map(|c| c.pixel_sigma()).collect();
+    let px = 64 * 64;
+    let mut yellow = 0;
+    for k in 0..seq.len() {
+        let written = image::open(out.join("sigma").join(format!("{k}.png")))
+            .unwrap()
+            .into_rgb8()
+            .into_raw();
+        yellow += written
+            .chunks_exact(3)
+            .filter(|&rgb| rgb == heat_map_rgb(1.0))
+            .count();
+        assert_eq!(written, whole.sigma_map(k, max), "sigma/{k}.png");
+        let page = heat_map(&sigma[k * px..(k + 1) * px], scale);
+        let worst = page
+            .iter()
+            .zip(&written)
+            .map(|(&a, &b)| a.abs_diff(b))
+            .max();
+        assert!(
+            worst <= Some(1),
+            "step {k}: the page's heat map and sigma/{k}.png differ by {worst:?}"
+        );
+    }
+    // The scale is the largest σ shown: the most uncertain pixel is full yellow.
+    assert!(yellow > 0, "no pixel of sigma/*.png is full yellow");
 }

@@ -124,10 +124,10 @@ fn frames_show_the_scene() {
 
 #[test]
 fn bad_settings_are_errors() {
-    assert_eq!(
+    assert!(matches!(
         Simulator::new(Action::Grasp, 0, 100).err(),
         Some(SimError::ImageSize(100))
-    );
+    ));
     let err = Simulator::with_object(Action::Move, 0.5, 0.5, 0, 64)
         .err()
         .unwrap();
@@ -157,4 +157,54 @@ fn stepping_matches_run() {
     assert_eq!(k, seq.len());
     assert!(!sim.step(), "stepping past the end changes nothing");
     assert_eq!(sim.step_index(), seq.len() - 1);
+}
+
+#[cfg(not(target_arch = "wasm32"))]
+#[test]
+fn generate_writes_a_dataset_that_reads_back() {
+    use dmbn::data::Dataset;
+    use dmbn::sim::generate;
+
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("data");
+    let mut calls = Vec::new();
+    let written = generate(&out, 0..2, 5, &[Action::Grasp], 64, 2, |done, total| {
+        calls.push((done, total))
+    })
+    .unwrap();
+    assert_eq!(written, out);
+    assert_eq!(calls, [(0, 2), (1, 2), (2, 2)]);
+    let dataset = Dataset::open(&out).unwrap();
+    assert_eq!(dataset.ids(), [0, 1]);
+    assert_eq!(dataset.actions(), ["grasp"]);
+    for (id, seq_ref) in dataset.sequences().iter().enumerate() {
+        let seq = dataset.read(seq_ref, None).unwrap();
+        let expected = episode(Action::Grasp, 5 + id as u64, 64).unwrap();
+        assert_eq!(seq.len(), expected.len());
+        assert_eq!(
+            seq.frames, expected.frames,
+            "sequence {id}: the frames are PNGs"
+        );
+    }
+    // Nothing but the dataset is left beside it.
+    assert_eq!(std::fs::read_dir(tmp.path()).unwrap().count(), 1);
+
+    let err = generate(&out, 0..1, 5, &[Action::Move], 64, 1, |_, _| {}).unwrap_err();
+    assert!(matches!(err, SimError::Data(_)), "{err}");
+    let err = generate(
+        &tmp.path().join("b"),
+        0..1,
+        5,
+        &[Action::Move],
+        32,
+        1,
+        |_, _| {},
+    )
+    .unwrap_err();
+    assert_eq!(
+        err.to_string(),
+        "sequence 0 (move, seed 5): image size 32 is not supported: expected 64 or 128"
+    );
+    // The failed run left neither `b` nor its temporary folder.
+    assert_eq!(std::fs::read_dir(tmp.path()).unwrap().count(), 1);
 }

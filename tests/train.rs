@@ -1,17 +1,19 @@
 //! Training: the loss falls on a tiny generated dataset, `resume` reproduces the uninterrupted
-//! run exactly, a non-finite loss stops with a clear error and keeps the last checkpoint, and
-//! bad settings are refused.
+//! run exactly (a finished run extended, and a cosine-schedule run killed between checkpoints),
+//! a non-finite loss stops with a clear error and keeps the last checkpoint, and bad settings
+//! are refused.
 #![cfg(not(target_arch = "wasm32"))]
 
 mod support;
 
+use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::Path;
 use std::sync::Mutex;
 
 use dmbn::model::ModelKind;
 use dmbn::predict::{Observations, Predictor};
 use dmbn::sim::{episode, Action};
-use dmbn::train::{Checkpoint, Metrics, TrainConfig, TrainError, Trainer};
+use dmbn::train::{Checkpoint, Metrics, Schedule, TrainConfig, TrainError, Trainer};
 
 /// A dataset of `n` ids × both actions from the simulator.
 fn dataset(dir: &Path, n: u32) {
@@ -79,6 +81,26 @@ fn loss_falls(models: &[ModelKind]) {
     }
 }
 
+/// A line of `metrics.jsonl` without its one wall-clock field: what two runs of the same
+/// steps must agree on exactly.
+fn deterministic(m: &Metrics) -> Metrics {
+    Metrics {
+        steps_per_s: 0.0,
+        ..m.clone()
+    }
+}
+
+/// The final model's prediction of a fixed episode: equal predictions, equal weights (the files
+/// may differ in parameter ids).
+fn final_prediction(out: &Path) -> dmbn::predict::SequencePrediction {
+    let seq = episode(Action::Grasp, 9, 64).unwrap();
+    let observations = Observations::from_sequence(&seq, &[0, 30]).unwrap();
+    Predictor::load(out.join("model.dmbn"))
+        .unwrap()
+        .predict(&observations, &seq.times(), 0.5)
+        .unwrap()
+}
+
 #[test]
 fn resume_reproduces_the_uninterrupted_run() {
     let tmp = tempfile::tempdir().unwrap();
@@ -103,23 +125,95 @@ fn resume_reproduces_the_uninterrupted_run() {
     assert_eq!(a.len(), 6);
     assert_eq!(b.len(), 6, "the resumed log reads as one run");
     for (x, y) in a.iter().zip(&b) {
-        assert_eq!(
-            (x.step, x.loss, x.val_loss),
-            (y.step, y.loss, y.val_loss),
-            "step {}",
-            x.step
-        );
+        assert_eq!(deterministic(x), deterministic(y), "step {}", x.step);
     }
-    // Same final weights: identical predictions (the files may differ in parameter ids).
-    let seq = episode(Action::Grasp, 9, 64).unwrap();
-    let observations = Observations::from_sequence(&seq, &[0, 30]).unwrap();
-    let predict = |dir: &Path| {
-        Predictor::load(dir.join("model.dmbn"))
-            .unwrap()
-            .predict(&observations, &seq.times(), 0.5)
-            .unwrap()
+    assert_eq!(
+        final_prediction(&whole),
+        final_prediction(&parts),
+        "same final weights"
+    );
+}
+
+#[test]
+fn a_cosine_run_killed_between_checkpoints_resumes_as_if_never_stopped() {
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("data");
+    dataset(&data, 3);
+    let (steps, killed_at) = (7, 5);
+    let mut config = small(ModelKind::Pte, steps);
+    config.lr = 1e-3;
+    config.schedule = Schedule::Cosine {
+        final_fraction: 0.1,
     };
-    assert_eq!(predict(&whole), predict(&parts), "same final weights");
+    config.checkpoint_every = 3;
+    let whole = tmp.path().join("whole");
+    new_trainer(&data, &whole, config.clone())
+        .unwrap()
+        .run(false, |_| {})
+        .unwrap();
+
+    // Killed right after step 5 was logged: the last checkpoint is step 3's, and the log
+    // holds steps 4 and 5 that the resumed run must redo (and not log twice).
+    let parts = tmp.path().join("parts");
+    let mut trainer = new_trainer(&data, &parts, config.clone()).unwrap();
+    let killed = catch_unwind(AssertUnwindSafe(|| {
+        trainer.run(false, |p| {
+            if p.step == killed_at {
+                panic!("killed after step {killed_at}");
+            }
+        })
+    }));
+    assert!(killed.is_err(), "the run was not interrupted");
+    drop(trainer);
+    assert!(
+        !parts.join("model.dmbn").exists(),
+        "the killed run never finished"
+    );
+    assert_eq!(Checkpoint::read(&parts).unwrap().2.step, 3);
+    assert_eq!(metrics(&parts).len(), killed_at as usize);
+
+    let mut resumed = Trainer::resume(None, &parts, None).unwrap();
+    assert_eq!(resumed.step_count(), 3, "from the last checkpoint");
+    assert_eq!(resumed.config(), &config, "with the run's own settings");
+    assert_eq!(
+        resumed.data(),
+        Some(std::path::absolute(&data).unwrap().as_path())
+    );
+    resumed.run(false, |_| {}).unwrap();
+
+    let (a, b) = (metrics(&whole), metrics(&parts));
+    assert_eq!(a.len(), steps as usize);
+    assert_eq!(
+        b.iter().map(|m| m.step).collect::<Vec<_>>(),
+        (1..=steps).collect::<Vec<_>>(),
+        "the resumed log reads as one run"
+    );
+    for (x, y) in a.iter().zip(&b) {
+        // Losses, learning rate, validation: everything but the speed.
+        assert_eq!(deterministic(x), deterministic(y), "step {}", x.step);
+    }
+    // The learning rates are the cosine of the whole run (a resumed schedule restarted, or
+    // stretched over the remaining steps, would differ), falling at every step.
+    for m in &a {
+        assert_eq!(m.lr, config.schedule.rate(config.lr, m.step - 1, steps));
+    }
+    assert!(a.windows(2).all(|w| w[1].lr < w[0].lr), "{a:?}");
+    assert!(a.iter().any(|m| m.val_loss.is_some()));
+    assert_eq!(
+        final_prediction(&whole),
+        final_prediction(&parts),
+        "same final weights"
+    );
+    let (state_a, state_b) = (
+        Checkpoint::read(&whole).unwrap().2,
+        Checkpoint::read(&parts).unwrap().2,
+    );
+    assert_eq!(state_a.step, steps);
+    assert_eq!(
+        (state_a.step, state_a.best_val, &state_a.rng),
+        (state_b.step, state_b.best_val, &state_b.rng),
+        "same final checkpoint state"
+    );
 }
 
 #[test]

@@ -8,7 +8,9 @@ mod golden_prediction;
 #[path = "golden/score.rs"]
 mod golden_score;
 
-use dmbn::web::{placement_region, run_episode, Episode, ModelHandle, Prediction, Simulator};
+use dmbn::web::{
+    heat_map, placement_region, run_episode, Episode, ModelHandle, Prediction, Simulator,
+};
 use wasm_bindgen::{JsError, JsValue};
 use wasm_bindgen_test::wasm_bindgen_test;
 
@@ -195,6 +197,8 @@ fn prediction_arrays_have_sequence_shapes() {
     let (t, px) = (ep.steps(), 64 * 64 * 3);
     assert_eq!(p.image_mean().len(), t * px);
     assert_eq!(p.image_sigma().len(), t * px);
+    assert_eq!(p.mean_frames().len(), t * px);
+    assert_eq!(p.pixel_sigma().len(), t * px / 3);
     assert_eq!(p.joint_mean().len(), t * 7);
     assert_eq!(p.joint_sigma().len(), t * 7);
     assert!(p.max_image_sigma() > 0.0);
@@ -263,6 +267,18 @@ fn eval_sequences_t_p_f() {
     assert!(message(ep.eval_sequence("x", 0.0, None, None).err().unwrap()).contains("t, p or f"));
 }
 
+/// The largest difference between two arrays of the same length.
+fn max_diff<T: Copy + Into<f32>>(a: &[T], b: &[T]) -> f32 {
+    assert_eq!(a.len(), b.len(), "lengths");
+    a.iter()
+        .zip(b)
+        .map(|(&x, &y)| (x.into() - y.into()).abs())
+        .fold(0.0, f32::max)
+}
+
+/// The page's way (its workers `decode` in chunks of 10; it scales by the largest
+/// `maxImageSigma` of the chunks and colours with `heatMap`) gives what `predict` gives, σ
+/// heat maps included: those of `sigmaMap`, the code `dmbn predict` writes its σ images with.
 #[wasm_bindgen_test]
 fn encode_then_decode_in_chunks_matches_predict() {
     let (ep, p) = golden_prediction();
@@ -271,18 +287,46 @@ fn encode_then_decode_in_chunks_matches_predict() {
     let encoding = m
         .encode(frames, joints, times, golden_prediction::BLEND)
         .unwrap();
-    let mut joint_mean = vec![];
-    for chunk in ep.times().chunks(10) {
-        let out = m.decode(&encoding, chunk.to_vec()).unwrap();
-        let field = js_sys::Reflect::get(&out, &"jointMean".into()).unwrap();
-        joint_mean.extend(js_sys::Float32Array::from(field).to_vec());
+    let chunks: Vec<Prediction> = ep
+        .times()
+        .chunks(10)
+        .map(|chunk| m.decode(&encoding, chunk.to_vec()).unwrap())
+        .collect();
+    let cat = |part: fn(&Prediction) -> Vec<f32>| chunks.iter().flat_map(part).collect::<Vec<_>>();
+    assert_eq!(
+        chunks.iter().map(Prediction::steps).sum::<usize>(),
+        ep.steps()
+    );
+    for (what, part) in [
+        (
+            "joint mean",
+            Prediction::joint_mean as fn(&Prediction) -> Vec<f32>,
+        ),
+        ("joint σ", Prediction::joint_sigma),
+        ("pixel σ", Prediction::pixel_sigma),
+    ] {
+        let diff = max_diff(&cat(part), &part(&p));
+        assert!(
+            diff < 1e-4,
+            "{what}: encode/decode and predict differ by {diff}"
+        );
     }
-    let diff = joint_mean
-        .iter()
-        .zip(p.joint_mean())
-        .map(|(a, b)| (a - b).abs())
-        .fold(0.0, f32::max);
-    assert!(diff < 1e-4, "encode/decode and predict differ by {diff}");
+    let means: Vec<u8> = chunks.iter().flat_map(Prediction::mean_frames).collect();
+    assert!(max_diff(&means, &p.mean_frames()) <= 1.0, "mean frames");
+
+    let max = p.max_image_sigma();
+    let maxima = chunks.iter().map(Prediction::max_image_sigma);
+    let scale = golden_prediction::page_scale(maxima, max, 1e-4);
+    let (sigma, whole, px) = (cat(Prediction::pixel_sigma), p.pixel_sigma(), 64 * 64);
+    for k in 0..ep.steps() {
+        let cli = p.sigma_map(k, max).unwrap();
+        assert_eq!(heat_map(&whole[k * px..(k + 1) * px], max), cli, "step {k}");
+        let page = heat_map(&sigma[k * px..(k + 1) * px], scale);
+        assert!(
+            max_diff(&page, &cli) <= 1.0,
+            "step {k}: the page's heat map"
+        );
+    }
 }
 
 #[wasm_bindgen_test]

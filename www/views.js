@@ -1,4 +1,4 @@
-// Canvas helpers: frames, the σ heat map, the table map for placing the object, the timeline.
+// Canvas helpers: frames, the σ heat map's legend, the table map for placing the object, the timeline.
 
 /** RGB bytes (S×S×3, from `offset`) as ImageData. */
 export function rgbImage(rgb, size, offset = 0) {
@@ -13,37 +13,15 @@ export function rgbImage(rgb, size, offset = 0) {
   return img;
 }
 
-// Stops of matplotlib's inferno at 0, 0.25, 0.5, 0.75, 1: the same ramp as the native
-// figures (crate/predict/heat_map.rs).
-const INFERNO = [
-  [0, 0, 4],
-  [87, 16, 110],
-  [188, 55, 84],
-  [249, 142, 9],
-  [252, 255, 164],
-];
-
-/** σ per pixel (S×S, from `offset`) as a heat map ImageData, `scale` shown as full yellow. */
-export function heatImage(sigma, size, offset, scale) {
-  const img = new ImageData(size, size);
-  const s = scale > 0 && Number.isFinite(scale) ? scale : 1;
-  for (let i = 0; i < size * size; i++) {
-    const raw = sigma[offset + i] / s;
-    const v = (Number.isNaN(raw) ? 0 : Math.min(1, Math.max(0, raw))) * 4;
-    const k = Math.min(3, Math.floor(v));
-    const f = v - k;
-    const a = INFERNO[k];
-    const b = INFERNO[k + 1];
-    img.data[4 * i] = Math.round(a[0] + (b[0] - a[0]) * f);
-    img.data[4 * i + 1] = Math.round(a[1] + (b[1] - a[1]) * f);
-    img.data[4 * i + 2] = Math.round(a[2] + (b[2] - a[2]) * f);
-    img.data[4 * i + 3] = 255;
-  }
-  return img;
+/**
+ * CSS gradient of the σ heat maps' ramp, for its legend: `heatMap` (the wasm export that colours
+ * them, crate/predict/heat_map.rs) at 0, ¼, ½, ¾ and 1, the ramp's stops.
+ */
+export function heatGradient(heatMap) {
+  const rgb = heatMap(Float32Array.of(0, 0.25, 0.5, 0.75, 1), 1);
+  const stops = Array.from({ length: rgb.length / 3 }, (_, i) => `rgb(${rgb.subarray(3 * i, 3 * i + 3).join(",")})`);
+  return `linear-gradient(90deg, ${stops.join(", ")})`;
 }
-
-/** CSS gradient of the heat map ramp, for its legend. */
-export const HEAT_GRADIENT = `linear-gradient(90deg, ${INFERNO.map((c) => `rgb(${c.join(",")})`).join(", ")})`;
 
 /** Draws a placeholder (no prediction for this step yet) on a frame canvas. */
 export function clearFrame(canvas) {

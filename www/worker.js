@@ -14,7 +14,7 @@
 // Messages out:
 //   {type: "inited", id}
 //   {type: "loaded", id, model, fileKind, imageSize, bytes, fetchMs, parseMs}
-//   {type: "chunk", id, start, count, mean, sigma, jointMean, jointSigma, ms}
+//   {type: "chunk", id, start, count, mean, sigma, maxSigma, jointMean, jointSigma, ms}
 //   {type: "done", id, ms, encodeMs, steps}
 //   {type: "error", id, message}
 
@@ -81,7 +81,7 @@ function load(id, url) {
   return promise;
 }
 
-/** The page's model ids, in words (as MODELS in main.js). */
+/** The page's model ids, in words (as MODELS in config.js). */
 const NAMES = {
   attn: "Attentive (DMBN-PTE + attention)",
   dmbn: "DMBN",
@@ -142,9 +142,10 @@ async function predict(msg) {
     for (let start = 0; start < targets.length; start += chunk) {
       if (current !== id) return;
       const c0 = start === 0 ? t0 : performance.now();
-      // {len, meanFrames (RGB bytes), sigma (per pixel, mean of the channels), jointMean, jointSigma}
+      // A Prediction, as Model.predict returns: copied out (RGB bytes, σ per pixel), then freed.
       const p = model.decode(encoding, targets.subarray(start, Math.min(targets.length, start + chunk)));
-      const out = { start, count: p.len, mean: p.meanFrames, sigma: p.sigma, jointMean: p.jointMean, jointSigma: p.jointSigma };
+      const out = { start, count: p.len, mean: p.meanFrames(), sigma: p.pixelSigma(), maxSigma: p.maxImageSigma, jointMean: p.jointMean(), jointSigma: p.jointSigma() };
+      p.free();
       out.ms = performance.now() - c0;
       post({ type: "chunk", id, ...out }, [out.mean.buffer, out.sigma.buffer, out.jointMean.buffer, out.jointSigma.buffer]);
       await yieldToMessages(msg.delay);

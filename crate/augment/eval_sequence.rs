@@ -2,6 +2,7 @@ use rand::seq::SliceRandom;
 use rand_pcg::Pcg64;
 
 use super::time_warp::gather;
+use super::AugmentError;
 use crate::data::Sequence;
 
 /// The paper's evaluation sequences (§3, "Model Evaluation"): what a model is shown, and the
@@ -17,14 +18,16 @@ pub enum EvalMode {
 }
 
 impl std::str::FromStr for EvalMode {
-    type Err = String;
+    type Err = AugmentError;
 
     fn from_str(s: &str) -> Result<Self, Self::Err> {
         match s {
             "t" => Ok(EvalMode::Unchanged),
             "p" => Ok(EvalMode::Permuted),
             "f" => Ok(EvalMode::Frozen),
-            _ => Err(format!("{s:?} is not a mode: expected t, p or f")),
+            _ => Err(AugmentError::Mode {
+                found: s.to_string(),
+            }),
         }
     }
 }

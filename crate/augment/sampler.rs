@@ -226,6 +226,7 @@ mod tests {
     use super::*;
     use rand::SeedableRng;
 
+    /// A sequence whose frames count up byte by byte (for the layout test).
     fn seq(t: usize) -> Sequence {
         Sequence {
             image_size: 2,
@@ -236,50 +237,165 @@ mod tests {
         }
     }
 
+    /// Sequence `id` of `t` steps, every value tagged with its sequence and step: joint j of
+    /// step k is `1000·id + 10·k + j`, every byte of frame k is `100·id + k`.
+    fn tagged(id: usize, t: usize) -> Sequence {
+        assert!(100 * id + t <= 256, "frame tags fit a byte");
+        Sequence {
+            image_size: 2,
+            joints: (0..t)
+                .map(|k| std::array::from_fn(|j| (1000 * id + 10 * k + j) as f32))
+                .collect(),
+            endpoint: vec![[0.0; 7]; t],
+            object: vec![[0.0; 3]; t],
+            frames: (0..t).flat_map(|k| [(100 * id + k) as u8; 12]).collect(),
+        }
+    }
+
+    /// Statistics far from the identity (per column), so joints left unnormalised, or
+    /// normalised with another column's statistics, decode to no step.
+    fn norm() -> Normalization {
+        Normalization {
+            mean: [50.0, -20.0, 7.5, 300.0, 0.0, 1.0, -3.0],
+            std: [4.0, 0.5, 10.0, 2.5, 8.0, 0.25, 3.0],
+        }
+    }
+
+    /// The (sequence, step) a normalised joint row of `pool` comes from, checked against every
+    /// joint of the row.
+    fn joint_tag(pool: &[Sequence], joints: &[f32]) -> (usize, usize) {
+        let row: [f32; 7] = joints.try_into().unwrap();
+        let raw = norm().denormalize(&row);
+        let tag = raw[0].round() as usize;
+        let (id, k) = (tag / 1000, tag % 1000 / 10);
+        assert!(id < pool.len() && k < pool[id].len(), "joints {raw:?}");
+        for (j, &v) in raw.iter().enumerate() {
+            let expected = (1000 * id + 10 * k + j) as f32;
+            assert!((v - expected).abs() < 1e-2, "joint {j}: {v} at ({id}, {k})");
+        }
+        (id, k)
+    }
+
+    /// The (sequence, step) one context or target slot holds: its joints, its frame (every
+    /// pixel of it) and its time must all name the same step of the same sequence.
+    fn slot_tag(pool: &[Sequence], joints: &[f32], image: &[f32], time: f32) -> (usize, usize) {
+        let (id, k) = joint_tag(pool, joints);
+        let frame = (100 * id + k) as f32 / 255.0;
+        assert!(
+            image.iter().all(|&v| v == frame),
+            "frame of ({id}, {k}): {image:?}"
+        );
+        assert_eq!(time, pool[id].times()[k], "time of ({id}, {k})");
+        (id, k)
+    }
+
+    /// Every sequence of `batch` decoded: (the sequence, its context steps, its target steps).
+    /// Checks that real contexts come first and the padding is zero, and that each sequence's
+    /// contexts and targets all come from one sequence of `pool`.
+    fn decode(pool: &[Sequence], batch: &Batch) -> Vec<(usize, Vec<usize>, Vec<usize>)> {
+        let (n_max, m, s) = (batch.contexts, batch.targets, batch.image_size);
+        let px = 3 * s * s;
+        (0..batch.batch)
+            .map(|b| {
+                let mask = &batch.context_mask[b * n_max..(b + 1) * n_max];
+                let n = mask.iter().filter(|&&v| v == 1.0).count();
+                assert!((1..=n_max).contains(&n));
+                assert!(mask[..n].iter().all(|&v| v == 1.0), "real contexts first");
+                assert!(mask[n..].iter().all(|&v| v == 0.0), "then padding");
+                let context = |i: usize| {
+                    let slot = b * n_max + i;
+                    slot_tag(
+                        pool,
+                        &batch.context_joints[slot * JOINTS..(slot + 1) * JOINTS],
+                        &batch.context_images[slot * px..(slot + 1) * px],
+                        batch.context_times[slot],
+                    )
+                };
+                let target = |j: usize| {
+                    let slot = b * m + j;
+                    slot_tag(
+                        pool,
+                        &batch.target_joints[slot * JOINTS..(slot + 1) * JOINTS],
+                        &batch.target_images[slot * px..(slot + 1) * px],
+                        batch.target_times[slot],
+                    )
+                };
+                let (contexts, targets): (Vec<_>, Vec<_>) =
+                    ((0..n).map(context).collect(), (0..m).map(target).collect());
+                let id = contexts[0].0;
+                assert!(
+                    contexts.iter().chain(&targets).all(|&(i, _)| i == id),
+                    "sequence {b} mixes sequences: contexts {contexts:?}, targets {targets:?}"
+                );
+                for slot in b * n_max + n..(b + 1) * n_max {
+                    assert!(batch.context_joints[slot * JOINTS..(slot + 1) * JOINTS]
+                        .iter()
+                        .chain(&batch.context_images[slot * px..(slot + 1) * px])
+                        .chain([&batch.context_times[slot]])
+                        .all(|&v| v == 0.0));
+                }
+                let steps = |v: Vec<(usize, usize)>| v.into_iter().map(|(_, k)| k).collect();
+                (id, steps(contexts), steps(targets))
+            })
+            .collect()
+    }
+
+    fn distinct(steps: &[usize]) -> bool {
+        steps
+            .iter()
+            .enumerate()
+            .all(|(i, k)| !steps[..i].contains(k))
+    }
+
     #[test]
     fn contexts_and_targets_are_distinct_steps_of_one_sequence() {
-        let pool = vec![seq(20), seq(30)];
+        let pool = vec![tagged(0, 20), tagged(1, 30)];
         let sampler = Sampler::new(SamplerConfig {
             batch: 16,
             max_contexts: 5,
             targets: 4,
             contexts_in_targets: false,
-            joint_targets: 0,
+            joint_targets: 3,
             single_modality: 0.0,
             prefix_contexts: 0.0,
             warp: None,
         });
         let mut rng = Pcg64::seed_from_u64(1);
-        let batch = sampler.sample(&pool, &Normalization::identity(), &mut rng);
+        let (batch, joint_targets) = sampler.sample_with_joints(&pool, &norm(), &mut rng);
         assert_eq!(batch.context_images.len(), 16 * 5 * 12);
-        for b in 0..16 {
-            let mask = &batch.context_mask[b * 5..b * 5 + 5];
-            let n = mask.iter().filter(|&&v| v == 1.0).count();
-            assert!((1..=5).contains(&n));
+        let decoded = decode(&pool, &batch);
+        for (b, (id, contexts, targets)) in decoded.iter().enumerate() {
+            assert!(distinct(contexts), "{contexts:?}");
+            assert!(distinct(targets), "{targets:?}");
             assert!(
-                mask[..n].iter().all(|&v| v == 1.0),
-                "real contexts come first"
+                targets.iter().all(|k| !contexts.contains(k)),
+                "contexts {contexts:?}, targets {targets:?}"
             );
-            // Joint value k marks step k: contexts and targets must not overlap.
-            let ctx: Vec<f32> = (0..n)
-                .map(|i| batch.context_joints[(b * 5 + i) * 7])
-                .collect();
-            for j in 0..4 {
-                assert!(!ctx.contains(&batch.target_joints[(b * 4 + j) * 7]));
-            }
             assert!((0.0..=1.0).contains(&batch.blend[b]));
+            // The joint-only targets are steps of the same sequence, at their times.
+            for j in 0..3 {
+                let slot = b * 3 + j;
+                let (i, k) = joint_tag(
+                    &pool,
+                    &joint_targets.joints[slot * JOINTS..(slot + 1) * JOINTS],
+                );
+                assert_eq!(i, *id, "joint-only target {j} of sequence {b}");
+                assert_eq!(joint_targets.times[slot], pool[i].times()[k]);
+            }
         }
-        let again = sampler.sample(
-            &pool,
-            &Normalization::identity(),
-            &mut Pcg64::seed_from_u64(1),
-        );
-        assert_eq!(batch, again, "deterministic for a seed");
+        for id in 0..2 {
+            assert!(
+                decoded.iter().any(|d| d.0 == id),
+                "sequence {id} never drawn"
+            );
+        }
+        let again = sampler.sample_with_joints(&pool, &norm(), &mut Pcg64::seed_from_u64(1));
+        assert_eq!((batch, joint_targets), again, "deterministic for a seed");
     }
 
     #[test]
     fn contexts_lead_the_targets_when_asked() {
-        let pool = vec![seq(20), seq(30)];
+        let pool = vec![tagged(0, 20), tagged(1, 30)];
         let sampler = Sampler::new(SamplerConfig {
             batch: 16,
             max_contexts: 5,
@@ -290,29 +406,18 @@ mod tests {
             prefix_contexts: 0.0,
             warp: None,
         });
-        let batch = sampler.sample(
-            &pool,
-            &Normalization::identity(),
-            &mut Pcg64::seed_from_u64(2),
-        );
-        for b in 0..16 {
-            let n = batch.context_mask[b * 5..b * 5 + 5]
-                .iter()
-                .filter(|&&v| v == 1.0)
-                .count();
-            let target = |j: usize| batch.target_joints[(b * 8 + j) * 7];
-            for i in 0..n {
-                assert_eq!(target(i), batch.context_joints[(b * 5 + i) * 7]);
-                assert_eq!(
-                    batch.target_times[b * 8 + i],
-                    batch.context_times[b * 5 + i]
-                );
-            }
-            let ctx: Vec<f32> = (0..n)
-                .map(|i| batch.context_joints[(b * 5 + i) * 7])
-                .collect();
-            let others: Vec<f32> = (n..8).map(target).collect();
-            assert!(others.iter().all(|v| !ctx.contains(v)), "then other steps");
+        let batch = sampler.sample(&pool, &norm(), &mut Pcg64::seed_from_u64(2));
+        let decoded = decode(&pool, &batch);
+        for (_, contexts, targets) in &decoded {
+            let n = contexts.len();
+            assert_eq!(&targets[..n], &contexts[..], "the contexts first");
+            assert!(distinct(targets), "then other steps: {targets:?}");
+        }
+        for id in 0..2 {
+            assert!(
+                decoded.iter().any(|d| d.0 == id),
+                "sequence {id} never drawn"
+            );
         }
     }
 
@@ -329,8 +434,16 @@ mod tests {
     }
 
     #[test]
+    fn the_prediction_batch_holds_the_asked_steps() {
+        let pool = vec![tagged(0, 5), tagged(1, 9)];
+        let batch = Sampler::prediction(&pool[1], &[7, 2], &[2, 0, 8], 0.25, &norm());
+        assert_eq!(decode(&pool, &batch), vec![(1, vec![7, 2], vec![2, 0, 8])]);
+        assert_eq!(batch.blend, vec![0.25]);
+    }
+
+    #[test]
     fn single_modality_draws_c_of_0_and_1() {
-        let pool = vec![seq(20)];
+        let pool = vec![tagged(0, 20)];
         let sampler = Sampler::new(SamplerConfig {
             batch: 400,
             max_contexts: 3,
@@ -341,11 +454,8 @@ mod tests {
             prefix_contexts: 0.0,
             warp: None,
         });
-        let batch = sampler.sample(
-            &pool,
-            &Normalization::identity(),
-            &mut Pcg64::seed_from_u64(3),
-        );
+        let batch = sampler.sample(&pool, &norm(), &mut Pcg64::seed_from_u64(3));
+        decode(&pool, &batch);
         let count = |c: f32| batch.blend.iter().filter(|&&v| v == c).count();
         // About 100 each of c = 0 and c = 1, the other ~200 strictly inside.
         assert!((60..140).contains(&count(0.0)), "{}", count(0.0));
@@ -355,7 +465,7 @@ mod tests {
 
     #[test]
     fn prefix_contexts_observe_the_start_and_target_the_rest() {
-        let pool = vec![seq(100)];
+        let pool = vec![tagged(0, 100), tagged(1, 100)];
         let sampler = Sampler::new(SamplerConfig {
             batch: 300,
             max_contexts: 5,
@@ -366,50 +476,37 @@ mod tests {
             prefix_contexts: 1.0,
             warp: None,
         });
-        let batch = sampler.sample(
-            &pool,
-            &Normalization::identity(),
-            &mut Pcg64::seed_from_u64(4),
-        );
+        let batch = sampler.sample(&pool, &norm(), &mut Pcg64::seed_from_u64(4));
+        let decoded = decode(&pool, &batch);
         let mut last_contexts = Vec::new();
         let mut future_targets = 0;
-        for b in 0..300 {
-            // Joint value k marks step k.
-            let n = batch.context_mask[b * 5..b * 5 + 5]
-                .iter()
-                .filter(|&&v| v == 1.0)
-                .count();
-            let ctx: Vec<f32> = (0..n)
-                .map(|i| batch.context_joints[(b * 5 + i) * 7])
-                .collect();
-            let last = ctx.iter().cloned().fold(0.0, f32::max);
+        let mut others = 0;
+        for (_, contexts, targets) in &decoded {
+            let n = contexts.len();
+            let last = *contexts.iter().max().unwrap();
             assert!(
-                last < 90.0,
+                last < 90,
                 "a context at step {last}, past 90% of the sequence"
             );
             last_contexts.push(last);
-            let targets: Vec<f32> = (0..8)
-                .map(|j| batch.target_joints[(b * 8 + j) * 7])
-                .collect();
             assert_eq!(
                 &targets[..n],
-                &ctx[..],
+                &contexts[..],
                 "the contexts come first among the targets"
             );
-            assert!(targets[n..].iter().all(|k| !ctx.contains(k)));
+            assert!(distinct(targets), "then other steps: {targets:?}");
             future_targets += targets[n..].iter().filter(|&&k| k > last).count();
+            others += targets.len() - n;
+        }
+        for id in 0..2 {
+            assert!(
+                decoded.iter().any(|d| d.0 == id),
+                "sequence {id} never drawn"
+            );
         }
         // Prefixes of 10-90%: some end early, some late, and most targets lie ahead.
-        assert!(last_contexts.iter().any(|&k| k < 30.0));
-        assert!(last_contexts.iter().any(|&k| k > 60.0));
-        let others: usize = (0..300)
-            .map(|b| {
-                8 - batch.context_mask[b * 5..b * 5 + 5]
-                    .iter()
-                    .filter(|&&v| v == 1.0)
-                    .count()
-            })
-            .sum();
+        assert!(last_contexts.iter().any(|&k| k < 30));
+        assert!(last_contexts.iter().any(|&k| k > 60));
         assert!(
             future_targets * 2 > others,
             "{future_targets} of {others} targets ahead"

@@ -2,6 +2,7 @@ use rand::RngExt;
 use rand_pcg::Pcg64;
 use serde::{Deserialize, Serialize};
 
+use super::AugmentError;
 use crate::data::Sequence;
 
 /// The paper's training augmentation (§3.2): change the speed of random sections of a
@@ -39,38 +40,41 @@ impl Default for TimeWarpConfig {
 
 impl TimeWarpConfig {
     /// Checks every range: ordered, probabilities in [0, 1], fractions in (0, 1], speeds > 0.
-    pub fn validate(&self) -> Result<(), String> {
-        let probability = |name: &str, p: f64| {
-            if (0.0..=1.0).contains(&p) {
-                Ok(())
-            } else {
-                Err(format!("{name} is {p}: expected a probability in [0, 1]"))
-            }
+    pub fn validate(&self) -> Result<(), AugmentError> {
+        let bad = |field, value: String, expected: &str| AugmentError::TimeWarp {
+            field,
+            value,
+            expected: expected.to_string(),
         };
-        probability("probability", self.probability)?;
-        probability("freeze_probability", self.freeze_probability)?;
-        let ordered = |name: &str, lo: f64, hi: f64, min: f64| {
-            if lo.is_finite() && hi.is_finite() && min <= lo && lo <= hi {
-                Ok(())
-            } else {
-                Err(format!(
-                    "{name} is [{lo}, {hi}]: expected finite bounds, {min} <= low <= high"
-                ))
+        for (field, p) in [
+            ("probability", self.probability),
+            ("freeze_probability", self.freeze_probability),
+        ] {
+            if !(0.0..=1.0).contains(&p) {
+                return Err(bad(field, p.to_string(), "a probability in [0, 1]"));
             }
-        };
-        let [a, b] = self.sections;
-        ordered("sections", a as f64, b as f64, 0.0)?;
+        }
+        let ranges = [
+            ("sections", self.sections.map(|n| n as f64), 0.0),
+            ("section_fraction", self.section_fraction, 0.0),
+            ("speed", self.speed, f64::MIN_POSITIVE),
+            ("freeze_length", self.freeze_length.map(|n| n as f64), 0.0),
+        ];
+        for (field, [lo, hi], min) in ranges {
+            if !(lo.is_finite() && hi.is_finite() && min <= lo && lo <= hi) {
+                let expected = format!("finite bounds, {min} <= low <= high");
+                return Err(bad(field, format!("[{lo}, {hi}]"), &expected));
+            }
+        }
         let [a, b] = self.section_fraction;
-        ordered("section_fraction", a, b, 0.0)?;
-        if b > 1.0 || a <= 0.0 {
-            return Err(format!(
-                "section_fraction is [{a}, {b}]: expected fractions in (0, 1]"
+        if a <= 0.0 || b > 1.0 {
+            return Err(bad(
+                "section_fraction",
+                format!("[{a}, {b}]"),
+                "fractions in (0, 1]",
             ));
         }
-        let [a, b] = self.speed;
-        ordered("speed", a, b, f64::MIN_POSITIVE)?;
-        let [a, b] = self.freeze_length;
-        ordered("freeze_length", a as f64, b as f64, 0.0)
+        Ok(())
     }
 
     /// The step indices of a warped version of a `len`-step sequence: non-decreasing, each in

@@ -12,6 +12,7 @@
 //! whole dataset in a temporary folder renamed into place at the end. Action folders are plain
 //! names here (`"grasp"`, `"move"`) so this module does not depend on the simulator.
 mod action_summary;
+mod atomic_write;
 mod dataset;
 mod dataset_writer;
 mod error;
@@ -20,10 +21,11 @@ mod normalization;
 mod reader;
 mod sequence;
 mod sequence_ref;
+mod sequence_writer;
 mod summary;
-mod writer;
 
 pub use action_summary::ActionSummary;
+pub use atomic_write::write_atomic;
 pub use dataset::Dataset;
 pub use dataset_writer::DatasetWriter;
 pub use error::DataError;
@@ -32,5 +34,5 @@ pub use normalization::Normalization;
 pub use reader::read_sequence;
 pub use sequence::{Sequence, ENDPOINT, JOINTS};
 pub use sequence_ref::SequenceRef;
+pub use sequence_writer::write_sequence;
 pub use summary::Summary;
-pub use writer::{write_atomic, write_sequence};

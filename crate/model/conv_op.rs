@@ -4,10 +4,11 @@
 //! the heads' channels to channels-first frames.
 //!
 //! burn flex's differentiable `conv2d` is where a training step would spend most of its time
-//! (one frame at a time, and the decoder convolves every upsampled map in full). These run forward on the inference kernels of
-//! [`FeatureMap`](super::FeatureMap) and backward on the same patches and products transposed
-//! ([`Kernels::input_gradient`], [`Kernels::weight_gradients`]), so training and inference share
-//! one implementation. Native only: wasm has no autodiff.
+//! (one frame at a time, and the decoder convolves every upsampled map in full). These run
+//! forward on the inference kernels of [`FeatureMap`](super::kernels::FeatureMap) and backward
+//! on the same patches and products transposed ([`Kernels::input_gradient`],
+//! [`Kernels::weight_gradients`]), so training and inference share one implementation. Native
+//! only: wasm has no autodiff.
 use std::borrow::Cow;
 use std::ops::Range;
 use std::sync::Arc;
@@ -22,7 +23,7 @@ use burn::backend::{Autodiff, Flex};
 use burn::nn::conv::Conv2d;
 use burn::tensor::{Tensor, TensorData};
 
-use super::feature_map::{max_pool2_gradient, max_pool2_indexed, Activation, Kernels};
+use super::kernels::{max_pool2_gradient, max_pool2_indexed, Activation, Kernels};
 
 /// The autodiff backend training runs on (`Device::flex().autodiff()`).
 type Trained = Autodiff<Flex, NoCheckpointing>;
@@ -30,7 +31,7 @@ type Trained = Autodiff<Flex, NoCheckpointing>;
 /// Whether `x` lives on the backend these operations run on (flex with autodiff, as
 /// `Device::flex().autodiff()` makes); on others (the `cuda` feature) the networks train
 /// through burn's own layers.
-pub fn supported<const D: usize>(x: &Tensor<D>) -> bool {
+pub(crate) fn supported<const D: usize>(x: &Tensor<D>) -> bool {
     x.clone().try_into_primitive::<Trained>().is_ok()
 }
 
@@ -120,21 +121,34 @@ impl Backward<Flex, 3> for Conv3x3Backward {
 }
 
 /// The bias of one of the image networks' convolutions (they all have one).
-pub fn bias(conv: &Conv2d) -> Tensor<1> {
+fn bias(conv: &Conv2d) -> Tensor<1> {
     let bias = conv.bias.as_ref();
     bias.expect("the image networks' convolutions have biases")
         .val()
 }
 
-/// [`conv3x3_weights`] with the weight and bias of the 3×3 convolution `conv`.
-pub fn conv3x3(x: Tensor<4>, conv: &Conv2d, upsampled: bool, activation: Activation) -> Tensor<4> {
-    conv3x3_weights(x, conv.weight.val(), bias(conv), upsampled, activation)
+/// [`conv3x3_weights`] with the weights and biases of the 3×3 convolutions `convs`, their
+/// outputs side by side as channels (several: one product for all).
+pub(crate) fn conv3x3(
+    x: Tensor<4>,
+    convs: &[&Conv2d],
+    upsampled: bool,
+    activation: Activation,
+) -> Tensor<4> {
+    let (weight, bias) = match convs {
+        [conv] => (conv.weight.val(), bias(conv)),
+        _ => (
+            Tensor::cat(convs.iter().map(|c| c.weight.val()).collect(), 0),
+            Tensor::cat(convs.iter().map(|c| bias(c)).collect(), 0),
+        ),
+    };
+    conv3x3_weights(x, weight, bias, upsampled, activation)
 }
 
 /// `activation(conv3x3(x) + bias)` of the channels-last `[K, H, W, C_in]` map `x` (or of its
 /// nearest 2× upsampling, with `upsampled`) for the kernel `weight` `[C_out, C_in, 3, 3]`:
 /// `[K, H, W, C_out]` (or `[K, 2H, 2W, C_out]`), differentiable w.r.t. all three inputs.
-pub fn conv3x3_weights(
+fn conv3x3_weights(
     x: Tensor<4>,
     weight: Tensor<4>,
     bias: Tensor<1>,
@@ -186,7 +200,7 @@ impl Backward<Flex, 1> for MaxPoolBackward {
 }
 
 /// 2×2 max pooling with stride 2 of the channels-last `[K, H, W, C]` map `x`, differentiable.
-pub fn max_pool2(x: Tensor<4>) -> Tensor<4> {
+pub(crate) fn max_pool2(x: Tensor<4>) -> Tensor<4> {
     let x = primitive(x);
     let (input, shape) = contiguous(x.primitive());
     let (out, from) = max_pool2_indexed(values(&input), shape);
@@ -260,7 +274,7 @@ impl Backward<Flex, 1> for ChannelsFirstBackward {
 /// channels-first `[K, len, H, W]` tensor, differentiable: burn's elementwise operations on a
 /// permuted or sliced view (the heads' sigmoid and softplus) are several times slower than on
 /// contiguous values.
-pub fn channels_first(x: Tensor<4>, channels: Range<usize>) -> Tensor<4> {
+pub(crate) fn channels_first(x: Tensor<4>, channels: Range<usize>) -> Tensor<4> {
     let x = primitive(x);
     let (input, shape) = contiguous(x.primitive());
     let [k, h, w, c] = shape;

@@ -167,67 +167,6 @@ pub fn load_bytes_expecting(
     Ok((model, header.normalization, config))
 }
 
-/// Writes the model file at `path` atomically: a temporary file beside it, then a rename, so
-/// an interrupted save never leaves a half-written model behind.
-#[cfg(not(target_arch = "wasm32"))]
-pub fn save(
-    path: impl AsRef<std::path::Path>,
-    model: &Model,
-    normalization: &Normalization,
-    half: bool,
-) -> Result<(), ModelError> {
-    use std::io::Write;
-    let path = path.as_ref();
-    let bytes = save_bytes(model, normalization, half)?;
-    let mut name = path
-        .file_name()
-        .ok_or_else(|| ModelError::Io {
-            path: path.to_path_buf(),
-            source: std::io::Error::new(std::io::ErrorKind::InvalidInput, "no file name"),
-        })?
-        .to_os_string();
-    name.push(format!(".tmp-{}", std::process::id()));
-    let tmp = path.with_file_name(name);
-    let write = || -> std::io::Result<()> {
-        let mut file = std::fs::File::create(&tmp)?;
-        file.write_all(&bytes)?;
-        file.sync_all()
-    };
-    if let Err(source) = write() {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(ModelError::Io { path: tmp, source });
-    }
-    std::fs::rename(&tmp, path).map_err(|source| {
-        let _ = std::fs::remove_file(&tmp);
-        ModelError::Io {
-            path: path.to_path_buf(),
-            source,
-        }
-    })
-}
-
-/// Reads the model file at `path`; see [`load_bytes`].
-#[cfg(not(target_arch = "wasm32"))]
-pub fn load(
-    path: impl AsRef<std::path::Path>,
-    device: &Device,
-) -> Result<(Model, Normalization, ModelConfig), ModelError> {
-    load_expecting(path, device, None, None)
-}
-
-/// Reads the model file at `path`; see [`load_bytes_expecting`].
-#[cfg(not(target_arch = "wasm32"))]
-pub fn load_expecting(
-    path: impl AsRef<std::path::Path>,
-    device: &Device,
-    kind: Option<ModelKind>,
-    image_size: Option<usize>,
-) -> Result<(Model, Normalization, ModelConfig), ModelError> {
-    let path = path.as_ref();
-    let bytes = std::fs::read(path).map_err(ModelError::io(path))?;
-    load_bytes_expecting(&bytes, device, kind, image_size).map_err(ModelError::in_file(path))
-}
-
 /// Checks the framing, parses and validates the header, checks the weights' checksum and
 /// returns the header with the weight section.
 fn split(bytes: &[u8]) -> Result<(ModelHeader, &[u8]), ModelError> {

@@ -4,10 +4,10 @@ use burn::nn::conv::Conv2d;
 use burn::tensor::activation::sigmoid;
 use burn::tensor::{Device, Tensor};
 
-#[cfg(not(target_arch = "wasm32"))]
-use super::feature_map::is_tracked;
-use super::feature_map::{new_conv3x3, Activation, FeatureMap, KernelCache};
 use super::gaussian::bounded_sigma;
+use super::init::conv3x3;
+use super::kernels::{Activation, KernelCache};
+use super::maps::Maps;
 use super::FrameStart;
 
 /// The gate head's starting bias: σ(0) = 1/2 away from the observations, so that the drawn
@@ -57,7 +57,7 @@ pub struct ImageDecoder {
     pub sigma_floor: f64,
     /// The inference kernels prepared from the convolutions above.
     #[module(skip)]
-    pub kernels: KernelCache,
+    pub(crate) kernels: KernelCache,
 }
 
 /// What an [`ImageDecoder`] returns for K targets, each `[K, 3, S, S]`.
@@ -80,7 +80,7 @@ impl ImageDecoderConfig {
             filters
                 .iter()
                 .map(|&f| {
-                    let conv = new_conv3x3([channels, f], device);
+                    let conv = conv3x3([channels, f], device);
                     channels = f;
                     conv
                 })
@@ -91,10 +91,10 @@ impl ImageDecoderConfig {
         ImageDecoder {
             blocks,
             tail,
-            mean: new_conv3x3([channels, 3], device),
-            sigma: new_conv3x3([channels, 3], device),
+            mean: conv3x3([channels, 3], device),
+            sigma: conv3x3([channels, 3], device),
             gate: self.gated.then(|| {
-                let mut gate = new_conv3x3([channels, 1], device);
+                let mut gate = conv3x3([channels, 1], device);
                 gate.weight = gate.weight.map(|w| w.zeros_like());
                 gate.bias = Some(Param::from_tensor(Tensor::full([1], GATE_BIAS, device)));
                 gate
@@ -106,38 +106,24 @@ impl ImageDecoderConfig {
 }
 
 impl ImageDecoder {
-    /// `[K, input]` to the mean and σ frames, each `[K, 3, S, S]` with S = 2^(blocks + 1):
-    /// through the differentiable operations of `conv_op` when training (see
-    /// `is_tracked`; through burn's layers on other backends than flex), else straight through
-    /// the inference kernels ([`FeatureMap`]). Both of ours fold each upsampling into the
-    /// convolution that reads it. A gated decoder mixes its mean with `start` (the attentive
-    /// model's interpolated observations).
+    /// `[K, input]` to the mean and σ frames, each `[K, 3, S, S]` with S = 2^(blocks + 1).
+    /// Training runs the layers as differentiable operations (on flex those of `conv_op`,
+    /// elsewhere burn's own layers), inference on the kernels; `Maps` picks the path, and
+    /// both of ours fold each upsampling into the convolution that reads it. A gated decoder
+    /// mixes its mean with `start` (the attentive model's interpolated observations).
     pub fn forward(&self, x: Tensor<2>, start: Option<FrameStart>) -> DecodedFrames {
-        #[cfg(not(target_arch = "wasm32"))]
-        if is_tracked(&x) || is_tracked(&self.mean.weight.val()) {
-            let raw = if super::conv_op::supported(&x) {
-                self.forward_tracked(x)
-            } else {
-                self.forward_burn(x)
-            };
-            return self.heads(raw, start);
-        }
         let [k, width] = x.dims();
-        let device = x.device();
-        let mut map = FeatureMap::from_channels_first(x.reshape([k, width / 4, 2, 2]));
-        let layers = self.blocks.len() + self.tail.len();
-        for (i, conv) in self.blocks.iter().chain(&self.tail).enumerate() {
-            let kernels = self
-                .kernels
-                .get(i, &[conv], map.shape[3], self.upsampled(i));
-            map = map.conv3x3(&kernels, Activation::Relu);
+        let mut maps = Maps::new(x.reshape([k, width / 4, 2, 2]), Some(&self.mean));
+        let layers = self.blocks.iter().chain(&self.tail);
+        for (i, conv) in layers.enumerate() {
+            let upsampled = self.upsampled(i);
+            maps = maps.conv3x3(i, &[conv], upsampled, Activation::Relu, &self.kernels);
         }
         // All heads in one product.
+        let slot = self.blocks.len() + self.tail.len();
         let heads = self.head_convs();
-        let kernels = self.kernels.get(layers, &heads, map.shape[3], false);
-        let raw = map.conv3x3(&kernels, Activation::Identity);
-        let raw = raw.into_channels_first(&self.head_channels(), &device);
-        self.heads(raw, start)
+        let raw = maps.conv3x3(slot, &heads, false, Activation::Identity, &self.kernels);
+        self.heads(raw.into_channels_first(&self.head_channels()), start)
     }
 
     /// The heads, in the order of their raw outputs: mean, σ, gate.
@@ -160,51 +146,6 @@ impl ImageDecoder {
     /// block's output is.
     fn upsampled(&self, i: usize) -> bool {
         i > 0 && i <= self.blocks.len()
-    }
-
-    /// The layers as differentiable operations: `[K, input]` to the heads' raw outputs, each
-    /// `[K, channels, S, S]`.
-    #[cfg(not(target_arch = "wasm32"))]
-    fn forward_tracked(&self, x: Tensor<2>) -> Vec<Tensor<4>> {
-        use super::conv_op::{bias, channels_first, conv3x3, conv3x3_weights};
-        let [k, width] = x.dims();
-        let mut x = x.reshape([k, width / 4, 2, 2]).permute([0, 2, 3, 1]);
-        for (i, conv) in self.blocks.iter().chain(&self.tail).enumerate() {
-            x = conv3x3(x, conv, self.upsampled(i), Activation::Relu);
-        }
-        // All heads in one convolution.
-        let convs = self.head_convs();
-        let weight = Tensor::cat(convs.iter().map(|c| c.weight.val()).collect(), 0);
-        let bias = Tensor::cat(convs.iter().map(|c| bias(c)).collect(), 0);
-        let heads = conv3x3_weights(x, weight, bias, false, Activation::Identity);
-        let mut first = 0;
-        self.head_channels()
-            .into_iter()
-            .map(|c| {
-                first += c;
-                channels_first(heads.clone(), first - c..first)
-            })
-            .collect()
-    }
-
-    /// The layers through burn's own operations (upsampling in full), for training on backends
-    /// other than flex (the `cuda` feature), and what tests compare the other paths with:
-    /// `[K, input]` to the heads' raw outputs.
-    #[cfg(not(target_arch = "wasm32"))]
-    fn forward_burn(&self, x: Tensor<2>) -> Vec<Tensor<4>> {
-        use burn::tensor::activation::relu;
-        let [k, width] = x.dims();
-        let mut x = x.reshape([k, width / 4, 2, 2]);
-        for conv in &self.blocks {
-            x = upsample2(relu(conv.forward(x)));
-        }
-        for conv in &self.tail {
-            x = relu(conv.forward(x));
-        }
-        self.head_convs()
-            .into_iter()
-            .map(|conv| conv.forward(x.clone()))
-            .collect()
     }
 
     /// The heads' raw outputs to the mean (sigmoid, mixed with the start by a gated decoder)
@@ -270,9 +211,28 @@ mod tests {
         assert_eq!(y, expected);
     }
 
-    /// The decoder through burn's own layers: what both paths must equal.
+    /// The layers through burn's own operations (upsampling in full): `[K, input]` to the
+    /// heads' raw outputs.
+    fn forward_burn(decoder: &ImageDecoder, x: Tensor<2>) -> Vec<Tensor<4>> {
+        use burn::tensor::activation::relu;
+        let [k, width] = x.dims();
+        let mut x = x.reshape([k, width / 4, 2, 2]);
+        for conv in &decoder.blocks {
+            x = upsample2(relu(conv.forward(x)));
+        }
+        for conv in &decoder.tail {
+            x = relu(conv.forward(x));
+        }
+        decoder
+            .head_convs()
+            .into_iter()
+            .map(|conv| conv.forward(x.clone()))
+            .collect()
+    }
+
+    /// The decoder through burn's own layers: what the other paths must equal.
     fn reference(decoder: &ImageDecoder, x: Tensor<2>) -> (Tensor<4>, Tensor<4>) {
-        let frames = decoder.heads(decoder.forward_burn(x), None);
+        let frames = decoder.heads(forward_burn(decoder, x), None);
         (frames.mean, frames.sigma)
     }
 
@@ -316,7 +276,7 @@ mod tests {
                 observed: Tensor::<1>::from_floats([1.0, 0.0], &device).reshape([2, 1, 1, 1]),
                 near: Tensor::<1>::from_floats([0.3, 0.3], &device).reshape([2, 1, 1, 1]),
             };
-            let want = decoder.heads(decoder.forward_burn(x.clone()), Some(start.clone()));
+            let want = decoder.heads(forward_burn(&decoder, x.clone()), Some(start.clone()));
             let got = decoder.forward(x.clone(), Some(start));
             assert!(diff(want.mean.clone(), got.mean) < 1e-5);
             // The drawn frame is the mean a decoder without a start returns.

@@ -5,11 +5,9 @@ use burn::nn::Linear;
 use burn::tensor::activation::relu;
 use burn::tensor::{Device, Tensor};
 
-#[cfg(not(target_arch = "wasm32"))]
-use super::conv_op;
-#[cfg(not(target_arch = "wasm32"))]
-use super::feature_map::is_tracked;
-use super::feature_map::{new_conv3x3, Activation, FeatureMap, KernelCache};
+use super::init::conv3x3;
+use super::kernels::{Activation, KernelCache};
+use super::maps::Maps;
 
 /// Configuration of an [`ImageEncoder`].
 #[derive(Config, Debug)]
@@ -33,7 +31,7 @@ pub struct ImageEncoder {
     pub dense: Linear,
     /// The inference kernels prepared from the convolutions above.
     #[module(skip)]
-    pub kernels: KernelCache,
+    pub(crate) kernels: KernelCache,
 }
 
 impl ImageEncoderConfig {
@@ -44,7 +42,7 @@ impl ImageEncoderConfig {
             .filters
             .iter()
             .map(|&filters| {
-                let conv = new_conv3x3([channels, filters], device);
+                let conv = conv3x3([channels, filters], device);
                 channels = filters;
                 conv
             })
@@ -58,52 +56,18 @@ impl ImageEncoderConfig {
 }
 
 impl ImageEncoder {
-    /// `[K, C, S, S]` frames (S = 2^(blocks + 1)) to `[K, H]` encodings: through the
-    /// differentiable operations of `conv_op` when training (see
-    /// `is_tracked`; through burn's layers on other backends than flex), else straight through
-    /// the inference kernels ([`FeatureMap`]).
+    /// `[K, C, S, S]` frames (S = 2^(blocks + 1)) to `[K, H]` encodings. Training runs the
+    /// layers as differentiable operations (on flex those of `conv_op`, elsewhere burn's own
+    /// layers), inference on the kernels; `Maps` picks the path.
     pub fn forward(&self, images: Tensor<4>) -> Tensor<2> {
-        #[cfg(not(target_arch = "wasm32"))]
-        {
-            let weight = self.convs.first().map(|c| c.weight.val());
-            if is_tracked(&images) || weight.is_some_and(|w| is_tracked(&w)) {
-                let x = if conv_op::supported(&images) {
-                    self.convs_tracked(images)
-                } else {
-                    self.convs_burn(images)
-                };
-                return self.encode(x);
-            }
-        }
-        let device = images.device();
-        let mut map = FeatureMap::from_channels_first(images);
+        let mut maps = Maps::new(images, self.convs.first());
         for (i, conv) in self.convs.iter().enumerate() {
-            let kernels = self.kernels.get(i, &[conv], map.shape[3], false);
-            map = map.conv3x3(&kernels, Activation::Relu).max_pool2();
+            maps = maps
+                .conv3x3(i, &[conv], false, Activation::Relu, &self.kernels)
+                .max_pool2();
         }
-        let c = map.shape[3];
-        self.encode(map.into_channels_first(&[c], &device).remove(0))
-    }
-
-    /// The conv blocks as differentiable operations: `[K, C, S, S]` to `[K, C_last, 2, 2]`.
-    #[cfg(not(target_arch = "wasm32"))]
-    fn convs_tracked(&self, images: Tensor<4>) -> Tensor<4> {
-        use super::conv_op::{conv3x3, max_pool2};
-        let mut x = images.permute([0, 2, 3, 1]);
-        for conv in &self.convs {
-            x = max_pool2(conv3x3(x, conv, false, Activation::Relu));
-        }
-        x.permute([0, 3, 1, 2])
-    }
-
-    /// The conv blocks through burn's own layers, for training on backends other than flex
-    /// (the `cuda` feature), and what tests compare the other paths with.
-    #[cfg(not(target_arch = "wasm32"))]
-    fn convs_burn(&self, images: Tensor<4>) -> Tensor<4> {
-        let pool = burn::nn::pool::MaxPool2dConfig::new([2, 2]).init();
-        self.convs
-            .iter()
-            .fold(images, |x, conv| pool.forward(relu(conv.forward(x))))
+        let channels = maps.channels();
+        self.encode(maps.into_channels_first(&[channels]).remove(0))
     }
 
     /// The last feature maps `[K, C, 2, 2]` to the encodings.
@@ -119,6 +83,15 @@ mod tests {
     use crate::model::testing::{assert_gradient_close, max_abs, max_abs_diff};
     use burn::tensor::Distribution;
 
+    /// The conv blocks through burn's own layers: what the other paths must equal.
+    fn convs_burn(encoder: &ImageEncoder, images: Tensor<4>) -> Tensor<4> {
+        let pool = burn::nn::pool::MaxPool2dConfig::new([2, 2]).init();
+        encoder
+            .convs
+            .iter()
+            .fold(images, |x, conv| pool.forward(relu(conv.forward(x))))
+    }
+
     #[test]
     fn inference_and_training_equal_burns_layers_in_values_and_gradients() {
         // One encoder for all paths: two seeded inits can differ when tests run in parallel
@@ -130,7 +103,7 @@ mod tests {
         let fast = encoder.valid().forward(frames.clone());
         let frames = Tensor::<4>::from_data(frames.into_data(), &ad);
         let tracked = encoder.forward(frames.clone());
-        let expected = encoder.encode(encoder.convs_burn(frames));
+        let expected = encoder.encode(convs_burn(&encoder, frames));
         assert!(max_abs_diff(tracked.clone().inner(), fast) < 1e-5);
         assert!(max_abs_diff(tracked.clone().inner(), expected.clone().inner()) < 1e-5);
         // A weighted sum, so that every gradient differs from pixel to pixel.
@@ -146,6 +119,21 @@ mod tests {
             let bias = conv.bias.as_ref().unwrap();
             let got = bias.grad(&grads).expect("bias gradient");
             assert_gradient_close(got, bias.grad(&expected).unwrap(), scale);
+        }
+    }
+
+    #[test]
+    fn other_autodiff_backends_train_through_burns_layers() {
+        // Gradient checkpointing is another autodiff backend than the one conv_op runs on.
+        let device = Device::flex().autodiff().gradient_checkpointing();
+        let encoder = ImageEncoderConfig::new(4, vec![8, 16]).init(&device);
+        let frames = Tensor::<4>::random([2, 4, 8, 8], Distribution::Default, &device);
+        let got = encoder.forward(frames.clone());
+        let want = encoder.encode(convs_burn(&encoder, frames));
+        assert_eq!(max_abs_diff(got.clone().inner(), want.inner()), 0.0);
+        let grads = got.sum().backward();
+        for conv in &encoder.convs {
+            assert!(conv.weight.grad(&grads).is_some());
         }
     }
 }

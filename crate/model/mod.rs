@@ -20,7 +20,6 @@ mod dmbn;
 mod dmbn_attn;
 mod dmbn_pte;
 mod error;
-mod feature_map;
 pub mod file;
 mod gaussian;
 mod image_decoder;
@@ -29,7 +28,9 @@ mod init;
 mod interpolation;
 mod joint_decoder;
 mod joint_encoder;
+mod kernels;
 mod loss;
+mod maps;
 #[allow(clippy::module_inception)]
 mod model;
 mod prediction;
@@ -49,9 +50,6 @@ pub use dmbn::{Dmbn, DmbnConfig};
 pub use dmbn_attn::{DmbnAttn, DmbnAttnConfig};
 pub use dmbn_pte::{DmbnPte, DmbnPteConfig};
 pub use error::ModelError;
-pub use feature_map::{new_conv3x3, Activation, FeatureMap, KernelCache, Kernels};
-#[cfg(not(target_arch = "wasm32"))]
-pub use file::{load, load_expecting, save};
 pub use file::{load_bytes, load_bytes_expecting, read_header, save_bytes, ModelHeader};
 pub use gaussian::bounded_sigma;
 pub use image_decoder::{upsample2, DecodedFrames, ImageDecoder, ImageDecoderConfig};

@@ -90,9 +90,7 @@ impl Model {
     }
 
     /// Promises that the weights will not change any more, so the image networks' inference
-    /// kernels are reused without comparing weights (see [`KernelCache::freeze`]).
-    ///
-    /// [`KernelCache::freeze`]: super::KernelCache::freeze
+    /// kernels are reused without comparing them with the weights they were prepared from.
     pub fn freeze_kernels(&self) {
         self.image_encoder().kernels.freeze();
         self.decoder().image.kernels.freeze();

@@ -2,14 +2,15 @@
 //! page: [`Observations`] (context frames, joints and times, in dataset units) are encoded once
 //! by a [`Predictor`], which then decodes any number of target times in chunks into a
 //! [`SequencePrediction`] (mean and σ per pixel and per joint, back in dataset units).
-//! [`heat_map`] turns σ into the colour map shown by the CLI and the page.
+//! [`pixel_sigma`] and [`heat_map`] turn σ into the colour map shown by the CLI and the page,
+//! both scaled by [`SequencePrediction::max_image_sigma`].
 mod heat_map;
 mod observations;
 mod predictor;
 mod scores;
 mod sequence_prediction;
 
-pub use heat_map::{heat_map, heat_map_rgb};
+pub use heat_map::{heat_map, heat_map_rgb, pixel_sigma};
 pub use observations::Observations;
 pub use predictor::Predictor;
 pub use scores::Scores;

@@ -1,4 +1,4 @@
-use super::heat_map;
+use super::{heat_map, pixel_sigma};
 use crate::data::{Normalization, JOINTS};
 
 /// The predicted Gaussian at T target times, in dataset units: frames as interleaved RGB in
@@ -46,10 +46,12 @@ impl SequencePrediction {
     /// Mean frame `k` as RGB bytes.
     pub fn mean_frame(&self, k: usize) -> Vec<u8> {
         let n = self.frame_len();
-        self.image_mean[k * n..(k + 1) * n]
-            .iter()
-            .map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8)
-            .collect()
+        rgb_bytes(&self.image_mean[k * n..(k + 1) * n])
+    }
+
+    /// Every mean frame as RGB bytes, `T × S × S × 3`.
+    pub fn mean_frames(&self) -> Vec<u8> {
+        rgb_bytes(&self.image_mean)
     }
 
     /// σ of frame `k`, `S × S × 3`.
@@ -58,14 +60,22 @@ impl SequencePrediction {
         &self.image_sigma[k * n..(k + 1) * n]
     }
 
-    /// The largest pixel σ of the whole prediction: the common scale of its heat maps.
+    /// σ of every pixel, `T × S × S`: the mean of its channels ([`pixel_sigma`]), what the
+    /// heat maps show.
+    pub fn pixel_sigma(&self) -> Vec<f32> {
+        pixel_sigma(&self.image_sigma)
+    }
+
+    /// The largest pixel σ of the whole prediction (see [`Self::pixel_sigma`]; 0 when empty):
+    /// the common scale of its heat maps, the σ shown as full yellow by `dmbn predict`, the
+    /// evaluation figure and the page (which takes the largest over its decoded chunks).
     pub fn max_image_sigma(&self) -> f32 {
-        self.image_sigma.iter().copied().fold(0.0, f32::max)
+        self.pixel_sigma().into_iter().fold(0.0, f32::max)
     }
 
     /// σ of frame `k` as an RGB heat map scaled so that `scale` is full yellow.
     pub fn sigma_map(&self, k: usize, scale: f32) -> Vec<u8> {
-        heat_map(self.sigma_frame(k), scale)
+        heat_map(&pixel_sigma(self.sigma_frame(k)), scale)
     }
 
     /// Appends the model's outputs for `times` (channels-first frames, normalised joints),
@@ -99,5 +109,38 @@ impl SequencePrediction {
             self.joint_sigma
                 .extend(sigma.iter().zip(normalization.std).map(|(s, std)| s * std));
         }
+    }
+}
+
+/// Values in [0, 1] (clamped) as bytes.
+fn rgb_bytes(values: &[f32]) -> Vec<u8> {
+    values
+        .iter()
+        .map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8)
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::predict::heat_map_rgb;
+
+    #[test]
+    fn the_largest_sigma_is_the_brightest_pixel_of_the_heat_map() {
+        let p = SequencePrediction {
+            image_size: 1,
+            times: vec![0.0, 1.0],
+            image_mean: vec![0.0, 0.5, 2.0, 1.0, -1.0, 0.25],
+            image_sigma: vec![0.25, 0.5, 0.75, 0.125, 0.125, 0.125],
+            ..SequencePrediction::empty(1)
+        };
+        assert_eq!(p.pixel_sigma(), vec![0.5, 0.125]);
+        // The mean of the channels, not the largest channel (0.75).
+        assert_eq!(p.max_image_sigma(), 0.5);
+        assert_eq!(p.sigma_map(0, p.max_image_sigma()), heat_map_rgb(1.0));
+        assert_eq!(p.sigma_map(1, p.max_image_sigma()), heat_map_rgb(0.25));
+        assert_eq!(p.mean_frames(), vec![0, 128, 255, 255, 0, 64]);
+        assert_eq!(p.mean_frames()[3..], p.mean_frame(1));
+        assert_eq!(SequencePrediction::empty(4).max_image_sigma(), 0.0);
     }
 }

@@ -1,7 +1,10 @@
 use thiserror::Error;
 
-/// What can go wrong when setting up a simulation.
-#[derive(Debug, Error, PartialEq)]
+use super::Action;
+use crate::data::DataError;
+
+/// What can go wrong when setting up a simulation or generating a dataset.
+#[derive(Debug, Error)]
 pub enum SimError {
     #[error("unknown action {0:?}: expected \"grasp\" or \"move\"")]
     UnknownAction(String),
@@ -16,4 +19,20 @@ pub enum SimError {
         y0: f32,
         y1: f32,
     },
+    #[error("sequence {id} ({action}, seed {seed}): {source}")]
+    Sequence {
+        id: u32,
+        action: Action,
+        seed: u64,
+        #[source]
+        source: Box<SimError>,
+    },
+    #[error("no sequences to generate: expected at least one id and one action")]
+    NothingToGenerate,
+    #[error("action {0} is listed twice: expected each action once")]
+    DuplicateAction(Action),
+    #[error("only {written} of {total} sequences were generated")]
+    Incomplete { written: usize, total: usize },
+    #[error(transparent)]
+    Data(#[from] DataError),
 }

@@ -111,7 +111,7 @@ mod tests {
     #[test]
     fn reaches_points_over_the_table() {
         let ik = Ik::default();
-        let mut q = super::super::actions::HOME_GUESS;
+        let mut q = super::super::plan::HOME_GUESS;
         for (x, y, z) in [
             (0.0, 0.55, 0.4),
             (0.15, 0.45, 0.05),

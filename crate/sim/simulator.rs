@@ -4,8 +4,8 @@ use rapier3d::math::Vector;
 
 use crate::data::Sequence;
 
-use super::actions::Plan;
 use super::arm::ARM_JOINTS;
+use super::plan::Plan;
 use super::render::{Primitive, Renderer};
 use super::scene::{Scene, CAMERA, DT, SUBSTEPS, TABLE};
 use super::{Action, SimError};

@@ -8,7 +8,7 @@ use rand::SeedableRng;
 use rand_pcg::Pcg64;
 
 use crate::augment::{Batch, Sampler, SamplerConfig};
-use crate::data::Sequence;
+use crate::data::{write_atomic, Sequence};
 use crate::model::{
     self, joint_nll, joint_target_tensors, tensors, LossValues, Model, ModelConfig, Normalization,
 };
@@ -346,7 +346,10 @@ impl Trainer {
             }
         }
         let path = self.out.join("model.dmbn");
-        model::save(&path, &self.model, &self.normalization, half)?;
+        write_atomic(
+            &path,
+            &model::save_bytes(&self.model, &self.normalization, half)?,
+        )?;
         Ok(path)
     }
 
@@ -369,7 +372,8 @@ impl Trainer {
         let score = quality.score();
         if score.is_finite() && self.best_quality.is_none_or(|(_, best)| score < best) {
             self.best_quality = Some((self.step, score));
-            model::save(self.best_path(), &self.model, &self.normalization, half)?;
+            let bytes = model::save_bytes(&self.model, &self.normalization, half)?;
+            write_atomic(&self.best_path(), &bytes)?;
         }
         Ok(Some(quality))
     }
@@ -479,7 +483,7 @@ fn validate(config: &TrainConfig) -> Result<(), TrainError> {
     }
     if let Some(warp) = &config.augment {
         warp.validate()
-            .map_err(|reason| TrainError::config("augment", reason))?;
+            .map_err(|reason| TrainError::config("augment", reason.to_string()))?;
     }
     model_config(config).validate()?;
     Ok(())

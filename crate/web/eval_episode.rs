@@ -4,7 +4,7 @@ use wasm_bindgen::prelude::*;
 
 use super::seed::parse_seed;
 use super::Episode;
-use crate::augment::{EvalMode, EvalSequence};
+use crate::augment::{AugmentError, EvalMode, EvalSequence};
 
 /// One of the paper's evaluation sequences of an episode (t, p or f), with explicit time
 /// stamps: what the page shows the model.
@@ -50,7 +50,9 @@ impl Episode {
         #[wasm_bindgen(js_name = freezeFrom)] freeze_from: Option<usize>,
         #[wasm_bindgen(js_name = freezeTo)] freeze_to: Option<usize>,
     ) -> Result<EvalEpisode, JsError> {
-        let mode: EvalMode = mode.parse().map_err(|e: String| JsError::new(&e))?;
+        let mode: EvalMode = mode
+            .parse()
+            .map_err(|e: AugmentError| JsError::new(&e.to_string()))?;
         let mut rng = Pcg64::seed_from_u64(parse_seed(seed)?);
         let freeze = freeze_from.map(|from| (from, freeze_to.unwrap_or(self.sequence().len())));
         Ok(EvalEpisode {

@@ -4,7 +4,7 @@ use wasm_bindgen::prelude::*;
 
 use serde::Serialize;
 
-use super::encoding::{decoded_object, Encoding};
+use super::encoding::Encoding;
 use super::Episode;
 use crate::predict::{Observations, Predictor, SequencePrediction};
 use crate::quality::{score_sequence, Quality, Scenario};
@@ -80,22 +80,21 @@ impl ModelHandle {
     }
 
     /// The prediction at `targetTimes` (a `Float32Array(M)` of finite phases) from `encoding`,
-    /// as `{len, meanFrames, sigma, jointMean, jointSigma, maxSigma}`: `meanFrames` a
-    /// `Uint8Array(M × S × S × 3)` of RGB mean frames, `sigma` a `Float32Array(M × S × S)` of
-    /// per-pixel σ (the mean over the 3 channels, what the σ heat maps show), `maxSigma` its
-    /// largest value, `jointMean` / `jointSigma` `Float32Array(M × 7)` in the episode's units.
-    /// Throws when `encoding` comes from another model or a time is not finite.
+    /// as `predict` returns it. Throws when `encoding` comes from another model or a time is
+    /// not finite.
     pub fn decode(
         &self,
         encoding: &Encoding,
         #[wasm_bindgen(js_name = targetTimes)] target_times: Vec<f32>,
-    ) -> Result<JsValue, JsError> {
+    ) -> Result<Prediction, JsError> {
         if encoding.model != self.id {
             return Err(JsError::new(
                 "this encoding was made by another model: encode the observations with this one",
             ));
         }
-        decoded_object(&self.inner.decode(&encoding.inner, &target_times)?)
+        Ok(Prediction {
+            inner: self.inner.decode(&encoding.inner, &target_times)?,
+        })
     }
 
     /// The quality benchmark on one episode (what `dmbn score` computes per sequence):
@@ -153,7 +152,8 @@ impl ModelHandle {
     }
 }
 
-/// The predicted Gaussian at each target time, copied out as typed arrays.
+/// The predicted Gaussian at each target time (from `Model.predict` or `Model.decode`), copied
+/// out as typed arrays.
 #[wasm_bindgen]
 pub struct Prediction {
     inner: SequencePrediction,
@@ -209,6 +209,19 @@ impl Prediction {
         self.inner.joint_sigma.clone()
     }
 
+    /// Every mean frame as RGB bytes, `Uint8Array(T × S × S × 3)`.
+    #[wasm_bindgen(js_name = meanFrames)]
+    pub fn mean_frames(&self) -> Vec<u8> {
+        self.inner.mean_frames()
+    }
+
+    /// σ of every pixel, `Float32Array(T × S × S)`: the mean over its 3 channels, what the σ
+    /// heat maps show (`heatMap`, `sigmaMap`).
+    #[wasm_bindgen(js_name = pixelSigma)]
+    pub fn pixel_sigma(&self) -> Vec<f32> {
+        self.inner.pixel_sigma()
+    }
+
     /// Mean frame `k` as RGB bytes, `Uint8Array(S × S × 3)`.
     #[wasm_bindgen(js_name = meanFrame)]
     pub fn mean_frame(&self, k: usize) -> Result<Vec<u8>, JsError> {
@@ -224,7 +237,8 @@ impl Prediction {
         Ok(self.inner.sigma_map(k, scale))
     }
 
-    /// The largest pixel σ of the prediction.
+    /// The largest pixel σ of the prediction (of `pixelSigma`): the σ that `dmbn predict`
+    /// shows as full yellow, the scale to pass to `sigmaMap` and `heatMap`.
     #[wasm_bindgen(getter, js_name = maxImageSigma)]
     pub fn max_image_sigma(&self) -> f32 {
         self.inner.max_image_sigma()

@@ -60,11 +60,12 @@ describe("Model.encode / Model.decode (the page's worker API)", () => {
         parts.push(stream.decode(encoding, targets.subarray(start, start + 10)));
       }
       const cat = (key, Type) => {
-        const out = new Type(parts.reduce((n, p) => n + p[key].length, 0));
+        const arrays = parts.map((p) => p[key]());
+        const out = new Type(arrays.reduce((n, a) => n + a.length, 0));
         let at = 0;
-        for (const p of parts) {
-          out.set(p[key], at);
-          at += p[key].length;
+        for (const a of arrays) {
+          out.set(a, at);
+          at += a.length;
         }
         return out;
       };
@@ -77,11 +78,12 @@ describe("Model.encode / Model.decode (the page's worker API)", () => {
       close(means, expected, 1, "mean frames (bytes)");
       // σ per pixel is the mean over the channels of imageSigma.
       const sigma3 = whole.imageSigma();
-      const sigma = cat("sigma", Float32Array);
+      const sigma = cat("pixelSigma", Float32Array);
       close(sigma, Float32Array.from(sigma, (_, i) => (sigma3[3 * i] + sigma3[3 * i + 1] + sigma3[3 * i + 2]) / 3), 1e-4, "pixel σ");
       const largest = sigma.reduce((m, v) => Math.max(m, v), 0);
-      assert.ok(Math.abs(Math.max(...parts.map((p) => p.maxSigma)) - largest) < 1e-6, "maxSigma");
+      assert.ok(Math.abs(Math.max(...parts.map((p) => p.maxImageSigma)) - largest) < 1e-6, "maxImageSigma");
       assert.ok(sigma.every((v) => v > 0 && Number.isFinite(v)));
+      for (const p of parts) p.free();
       encoding.free();
       whole.free();
       stream.free();

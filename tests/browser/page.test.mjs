@@ -108,6 +108,95 @@ async function output(page, step = 20) {
   return `${frame.hash}/${sigma.hash}/${plot.hash}`;
 }
 
+/** Polls a Node-side condition (what page.waitForFunction does in the page). */
+async function waitFor(condition, what, timeout = TIMEOUT) {
+  const end = Date.now() + timeout;
+  while (!condition()) {
+    if (Date.now() > end) assert.fail(`timed out waiting for ${what}`);
+    await new Promise((ok) => setTimeout(ok, 50));
+  }
+}
+
+/**
+ * Runs in the page or in a worker: counts the calls of the wasm package's `Model.encode`,
+ * `decode` and `predict` in that thread (into `self.inferenceCalls`), by patching the package
+ * instance the thread imported (the same URL resolves to the same module). In the page, that
+ * it is the initialised instance shows in `placementRegion` answering without an init call;
+ * in the workers, in the calls counted.
+ */
+async function countInference() {
+  const base = self.document ? document.baseURI : self.location.href;
+  const pkg = await import(new URL("../pkg/dmbn.js", base).href);
+  if (self.document) pkg.placementRegion();
+  const calls = (self.inferenceCalls = { encode: 0, decode: 0, predict: 0, decodedTargets: 0 });
+  const proto = pkg.Model.prototype;
+  for (const name of ["encode", "decode", "predict"]) {
+    const original = proto[name];
+    proto[name] = function (...args) {
+      calls[name]++;
+      if (name === "decode") calls.decodedTargets += args[1].length;
+      return original.apply(this, args);
+    };
+  }
+}
+
+/**
+ * The largest per-channel difference between the #frame-pred canvas (drawn at the model's
+ * resolution, so no scaling) and the wasm API's mean frame `k`, predicted in the page from the
+ * weights `file` and the observations the URL names (episode by action and seed, mode t,
+ * images + joints); also against another step's frame and another model's, which must differ.
+ */
+function drawnAgainstWasm(page, k, file, { otherStep, otherModel }) {
+  return page.evaluate(
+    async ({ k, file, otherStep, otherModel }) => {
+      const pkg = await import(new URL("../pkg/dmbn.js", document.baseURI).href);
+      await pkg.default({ module_or_path: new URL("../pkg/dmbn_bg.wasm", document.baseURI) });
+      const q = new URLSearchParams(location.search);
+      if (q.get("mode") !== "t" || q.get("observe") !== "both" || q.has("x")) throw new Error(`not the inputs computed here: ${q}`);
+      const seed = Number(q.get("seed"));
+      const steps = q.get("obs").split(",").map(Number);
+      const canvas = document.getElementById("frame-pred");
+      const episode = pkg.runEpisode(q.get("action"), seed, canvas.width);
+      const ev = episode.evalSequence("t", seed);
+      const S = canvas.width;
+      const px = S * S * 3;
+      const all = { frames: ev.frames(), joints: ev.joints(), times: ev.times() };
+      const frames = new Uint8Array(steps.length * px);
+      const joints = new Float32Array(steps.length * 7);
+      steps.forEach((s, i) => {
+        frames.set(all.frames.subarray(s * px, (s + 1) * px), i * px);
+        joints.set(all.joints.subarray(s * 7, (s + 1) * 7), i * 7);
+      });
+      const times = Float32Array.from(steps, (s) => all.times[s]);
+      const predict = async (name) => {
+        const bytes = new Uint8Array(await (await fetch(`../assets/models/${name}`)).arrayBuffer());
+        const model = pkg.Model.fromBytes(bytes);
+        if (model.imageSize !== S) throw new Error(`${name} predicts ${model.imageSize}×${model.imageSize} frames, the canvas is ${S}×${S}`);
+        const p = model.predict(frames, joints, times, all.times, 0.5);
+        model.free();
+        return p;
+      };
+      const drawn = canvas.getContext("2d").getImageData(0, 0, S, S).data;
+      const largest = (rgb) => {
+        let worst = 0;
+        for (let i = 0; i < S * S; i++) {
+          for (let c = 0; c < 3; c++) worst = Math.max(worst, Math.abs(drawn[4 * i + c] - rgb[3 * i + c]));
+        }
+        return worst;
+      };
+      const same = await predict(file);
+      const other = await predict(otherModel);
+      const out = { expected: largest(same.meanFrame(k)), otherStep: largest(same.meanFrame(otherStep)), otherModel: largest(other.meanFrame(k)) };
+      same.free();
+      other.free();
+      ev.free();
+      episode.free();
+      return out;
+    },
+    { k, file, otherStep, otherModel },
+  );
+}
+
 /** Stops playback, so frames only change when a test asks. */
 async function pause(page) {
   if ((await page.getAttribute("#play", "aria-pressed")) === "true") await page.click("#play");
@@ -248,10 +337,19 @@ describe("demo page", () => {
     await shot(page, "predicting");
     await waitState(page, "predicted");
 
-    await page.locator("#scrubber").fill(String(Math.floor(len / 2)));
+    const k = Math.floor(len / 2);
+    await page.locator("#scrubber").fill(String(k));
     const frame = await pixels(page, "frame-pred");
     const sigma = await pixels(page, "sigma-map");
     assert.ok(frame.std > 5, `predicted frame is not blank (std ${frame.std.toFixed(1)})`);
+    // The drawn frame is the wasm API's mean frame k for the same model and observations, and
+    // neither another step's nor another model's.
+    // (A tolerance of a few units per channel: the workers decode in chunks, the canvas rounds.)
+    const tol = 3;
+    const d = await drawnAgainstWasm(page, k, "attn-sim.dmbn", { otherStep: k + 1, otherModel: "dmbn-sim.dmbn" });
+    assert.ok(d.expected <= tol, `the drawn frame is Model.predict(…).meanFrame(${k}) (largest channel difference ${d.expected})`);
+    assert.ok(d.otherStep > tol, `the next step's frame is told apart (largest difference ${d.otherStep})`);
+    assert.ok(d.otherModel > tol, `another model's frame is told apart (largest difference ${d.otherModel})`);
     assert.ok(sigma.std > 1 && sigma.mean > 2, `σ map is not blank (mean ${sigma.mean.toFixed(1)}, std ${sigma.std.toFixed(1)})`);
     const timing = await page.textContent("#timing");
     assert.match(timing, /\d+ steps in \d+ ms \([\d.]+ ms per frame\)/);
@@ -269,18 +367,49 @@ describe("demo page", () => {
     await close(page);
   });
 
-  test("inference never blocks the page for long", async () => {
-    const page = await open(`${server.url}www/`);
+  test("inference runs in the workers and never blocks the page for long", async () => {
+    const workers = 2;
+    const page = await open(`${server.url}www/?workers=${workers}`);
     await waitState(page, "ready");
     await pause(page);
-    await page.evaluate(() => {
+    // Every worker is up once the page is ready; the counters go into all of them.
+    await waitFor(() => page.workers().length === workers, `${workers} workers`);
+    await Promise.all(page.workers().map((w) => w.evaluate(countInference)));
+    await page.evaluate(countInference);
+    const observable = await page.evaluate(() => {
       window.longTasks = [];
-      new PerformanceObserver((list) => window.longTasks.push(...list.getEntries().map((e) => e.duration))).observe({
+      new PerformanceObserver((list) => window.longTasks.push(...list.getEntries().map((e) => [e.startTime, e.duration]))).observe({
         type: "longtask",
       });
+      return PerformanceObserver.supportedEntryTypes.includes("longtask");
     });
+    assert.ok(observable, "the browser reports long tasks");
     await predict(page);
-    const longest = await page.evaluate(() => Math.max(0, ...window.longTasks));
+    const len = await page.evaluate(() => window.dmbnTimings.prediction.steps);
+    const inWorkers = await Promise.all(page.workers().map((w) => w.evaluate(() => self.inferenceCalls)));
+    const decoded = inWorkers.reduce((n, c) => n + c.decodedTargets, 0);
+    // (The workers that have loaded the model by then share the prediction.)
+    assert.ok(inWorkers.some((c) => c.decode > 0), `decode calls in the workers: ${JSON.stringify(inWorkers)}`);
+    assert.ok(inWorkers.every((c) => (c.decode > 0) === (c.encode > 0) && c.predict === 0), `each worker encodes, then decodes: ${JSON.stringify(inWorkers)}`);
+    assert.equal(decoded, len, "the workers decode every step of the sequence, once");
+    assert.deepEqual(await page.evaluate(() => window.inferenceCalls), { encode: 0, decode: 0, predict: 0, decodedTargets: 0 }, "the main thread runs no model");
+
+    // A known long task after the prediction shows that the observer records them, and
+    // delivers what it saw before.
+    // (A task of its own: the observer does not see the test's evaluate calls.)
+    const probe = await page.evaluate(
+      () =>
+        new Promise((ok) =>
+          setTimeout(() => {
+            const t0 = performance.now();
+            while (performance.now() - t0 < 400);
+            ok(t0);
+          }),
+        ),
+    );
+    await page.waitForFunction(() => window.longTasks.some(([, d]) => d >= 400));
+    const tasks = await page.evaluate(() => window.longTasks);
+    const longest = Math.max(0, ...tasks.filter(([start, d]) => start + d < probe).map(([, d]) => d));
     assert.ok(longest < 300, `longest main-thread task during a prediction: ${longest} ms`);
     await close(page);
   });

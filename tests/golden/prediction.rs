@@ -43,3 +43,15 @@ pub fn max_diff(a: &[f32], b: &[f32]) -> (f32, usize) {
         .map(|(i, (x, y))| ((x - y).abs(), i))
         .fold((0.0, 0), |m, d| if d.0 > m.0 { d } else { m })
 }
+
+/// The page's σ heat-map scale, the largest of its decoded chunks' `max_image_sigma`
+/// (`chunk_maxima`; www/prediction.js), checked to be within `tol` (relative) of `whole`, the
+/// scale of the whole prediction at once (`dmbn predict`'s).
+pub fn page_scale(chunk_maxima: impl IntoIterator<Item = f32>, whole: f32, tol: f32) -> f32 {
+    let scale = chunk_maxima.into_iter().fold(0.0, f32::max);
+    assert!(
+        (scale - whole).abs() <= tol * whole,
+        "the page's scale {scale}, the whole prediction's {whole}"
+    );
+    scale
+}

@@ -48,3 +48,14 @@ pub fn simulated_dataset(
     }
     writer.finish().unwrap();
 }
+
+/// Writes `model` as a model file at `path` (what `train` writes).
+pub fn save_model(
+    path: &Path,
+    model: &dmbn::model::Model,
+    normalization: &dmbn::model::Normalization,
+    half: bool,
+) {
+    let bytes = dmbn::model::save_bytes(model, normalization, half).unwrap();
+    dmbn::data::write_atomic(path, &bytes).unwrap();
+}

@@ -1,18 +1,96 @@
 //! `dmbn`: generate and inspect datasets in the DMBN layout, predict, evaluate and probe models.
-//! Thin on purpose: argument parsing and progress here, the work in the library. Native
-//! only: on wasm32 (where `wasm-pack test` also builds binaries) it is an empty program.
+//! Thin on purpose: argument parsing and progress here, the work in the library. A file per
+//! command; `args` and `output` hold what several share. Native only: on wasm32 (where
+//! `wasm-pack test` also builds binaries) it is an empty program.
 #[cfg(not(target_arch = "wasm32"))]
-mod cli;
+mod args;
+#[cfg(not(target_arch = "wasm32"))]
+mod error;
 #[cfg(not(target_arch = "wasm32"))]
 mod eval;
 #[cfg(not(target_arch = "wasm32"))]
+mod inspect;
+#[cfg(not(target_arch = "wasm32"))]
+mod output;
+#[cfg(not(target_arch = "wasm32"))]
 mod predict;
 #[cfg(not(target_arch = "wasm32"))]
+mod probe;
+#[cfg(not(target_arch = "wasm32"))]
+mod probe_sets;
+#[cfg(not(target_arch = "wasm32"))]
 mod score;
+#[cfg(not(target_arch = "wasm32"))]
+mod simulate;
+
+#[cfg(not(target_arch = "wasm32"))]
+#[derive(clap::Parser)]
+#[command(
+    name = "dmbn",
+    version,
+    about = "DMBN datasets and models: simulate, inspect, predict, eval, probe, score"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[cfg(not(target_arch = "wasm32"))]
+#[derive(clap::Subcommand)]
+enum Command {
+    /// Generate a dataset with the simulator, in the DMBN layout with PNG frames.
+    ///
+    /// Sequence id i (0..N) of every action uses seed S + i, so a dataset is reproduced
+    /// exactly from (N, S, image size). The dataset is built in `<out>.tmp-<pid>` and renamed
+    /// to OUT at the end: an interrupted run leaves no partial OUT.
+    Simulate(simulate::SimulateArgs),
+    /// Read and validate every sequence of a dataset, then print a summary.
+    Inspect(inspect::InspectArgs),
+    /// Predict a whole sequence from a few observed steps with a trained model.
+    ///
+    /// Writes mean/<k>.png (predicted frames), sigma/<k>.png (σ heat maps, one scale for the
+    /// sequence), truth/<k>.png, joints.png (true, predicted mean, ±2σ band, observed points)
+    /// and scores.json; prints MSE and NLL of both modalities.
+    Predict(predict::PredictArgs),
+    /// Reconstruct a t, p or f sequence from K observations (the paper's Figures 2-3).
+    ///
+    /// Writes figure.png (observed, generated with σ maps, targets, joint curves) and
+    /// eval.json; prints MSE and NLL over the sequence.
+    Eval(eval::EvalArgs),
+    /// The time-regression probe (the paper's Table 1): how well the context time can be read
+    /// back from each encoder's encodings, for Null, Random, DMBN and DMBN-PTE.
+    ///
+    /// Writes probe.md (the table) and probe.json (every seed's MSE).
+    Probe(probe::ProbeArgs),
+    /// The quality benchmark: models against the trivial baselines on held-out sequences.
+    ///
+    /// interp: K evenly spaced observations, every step predicted; extrap: the first 30%
+    /// observed at 3 steps, the rest predicted. Baselines: joints linearly interpolated between
+    /// the observations (held outside them) and the nearest observation's frame — holding the
+    /// last observation for extrap — and, with --mean-ids, each action's mean motion. Prints a
+    /// table per scenario (joint RMSE in radians, gripper error, image MSE, errors at the
+    /// observed steps, object visibility, NLL); --json writes them.
+    Score(score::ScoreArgs),
+}
 
 #[cfg(not(target_arch = "wasm32"))]
 fn main() -> std::process::ExitCode {
-    cli::main()
+    let cli = <Cli as clap::Parser>::parse();
+    let result = match cli.command {
+        Command::Simulate(args) => simulate::run(args),
+        Command::Inspect(args) => inspect::run(args),
+        Command::Predict(args) => predict::run(args),
+        Command::Eval(args) => eval::run(args),
+        Command::Probe(args) => probe::run(args),
+        Command::Score(args) => score::run(args),
+    };
+    match result {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            std::process::ExitCode::FAILURE
+        }
+    }
 }
 
 #[cfg(target_arch = "wasm32")]

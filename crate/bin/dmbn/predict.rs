@@ -1,17 +1,18 @@
 //! `dmbn predict`: observe a few steps of a dataset sequence, predict all of it, write the
 //! figures and print the scores.
-use std::fs;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use clap::Args;
 use image::RgbImage;
 use serde::Serialize;
 
-use dmbn::data::{Dataset, Sequence, JOINTS};
+use dmbn::data::{Sequence, JOINTS};
 use dmbn::figure::{joint_plot, save_png, JointPlot};
-use dmbn::predict::{Observations, Predictor, Scores, SequencePrediction};
+use dmbn::predict::{Observations, Scores, SequencePrediction};
 
-use crate::cli::CliError;
+use crate::args::{load, parse_blend, parse_sequence};
+use crate::error::CliError;
+use crate::output::{create_dir, write_json};
 
 #[derive(Args)]
 pub struct PredictArgs {
@@ -33,25 +34,6 @@ pub struct PredictArgs {
     /// Output folder (created if missing; files in it are replaced).
     #[arg(long)]
     out: PathBuf,
-}
-
-pub(crate) fn parse_sequence(s: &str) -> Result<(u32, String), String> {
-    let bad = || format!("{s:?} is not ID/ACTION: expected e.g. 3/grasp");
-    let (id, action) = s.split_once('/').ok_or_else(bad)?;
-    let id = id.parse().map_err(|_| bad())?;
-    if action.is_empty() {
-        return Err(bad());
-    }
-    Ok((id, action.to_string()))
-}
-
-pub(crate) fn parse_blend(s: &str) -> Result<f32, String> {
-    match s.parse::<f32>() {
-        Ok(c) if (0.0..=1.0).contains(&c) => Ok(c),
-        _ => Err(format!(
-            "{s:?} is not a blending coefficient: expected a number in [0, 1]"
-        )),
-    }
 }
 
 /// What `scores.json` holds.
@@ -147,37 +129,4 @@ fn write_figures(
     };
     save_png(&args.out.join("joints.png"), &joint_plot(&plot, 900, 900)?)?;
     Ok(())
-}
-
-/// The model file at `model` and sequence `id`/`action` of the dataset at `data`, read at the
-/// model's frame size (shared by `predict` and `eval`).
-pub(crate) fn load(
-    model: &Path,
-    data: &Path,
-    (id, action): &(u32, String),
-) -> Result<(Predictor, Sequence), CliError> {
-    let predictor = Predictor::load(model)?;
-    let dataset = Dataset::open(data)?;
-    let size = predictor.model().image_size() as u32;
-    let seq = dataset.read(dataset.find(*id, action)?, Some(size))?;
-    Ok((predictor, seq))
-}
-
-/// Creates `dir` and its parents.
-pub(crate) fn create_dir(dir: &Path) -> Result<(), CliError> {
-    fs::create_dir_all(dir).map_err(|source| CliError::Io {
-        path: dir.to_path_buf(),
-        source,
-    })
-}
-
-/// Writes `bytes` at `path` atomically.
-pub(crate) fn write(path: &Path, bytes: &[u8]) -> Result<(), CliError> {
-    Ok(dmbn::data::write_atomic(path, bytes)?)
-}
-
-/// Writes `value` as pretty JSON at `path` atomically.
-pub(crate) fn write_json(path: &Path, value: &impl Serialize) -> Result<(), CliError> {
-    let json = serde_json::to_vec_pretty(value).map_err(|e| CliError::Usage(e.to_string()))?;
-    write(path, &json)
 }

@@ -9,8 +9,9 @@ use dmbn::data::{Dataset, Sequence};
 use dmbn::predict::Predictor;
 use dmbn::quality::{score_sequence, Accumulator, MeanMotion, QualityReport, QualityRow, Scenario};
 
-use crate::cli::{parse_ids, progress, CliError};
-use crate::predict::{parse_blend, write_json};
+use crate::args::{parse_blend, parse_ids};
+use crate::error::CliError;
+use crate::output::{progress, write_json};
 
 #[derive(Clone, Copy, PartialEq, ValueEnum)]
 enum ScenarioArg {

@@ -7,7 +7,7 @@ use image::codecs::png::PngEncoder;
 use image::{ExtendedColorType, ImageEncoder};
 
 use super::layout::{endpoint_path, joint_path, object_path, sequence_dir, valid_action_name};
-use super::{DataError, Sequence};
+use super::{write_atomic, DataError, Sequence};
 
 /// Write `seq` as `<root>/<id>/<action>/<k>.png` plus `joint_<id>.txt`, `object_<id>.txt`
 /// and `endpoint_<id>.txt` (values space separated in Rust's shortest round-trip `{}` format,
@@ -40,24 +40,6 @@ pub fn write_sequence(
     write_atomic(&object_path(&dir, id), table(&seq.object).as_bytes())?;
     write_atomic(&endpoint_path(&dir, id), table(&seq.endpoint).as_bytes())?;
     Ok(dir)
-}
-
-/// Write `bytes` to `path` through a temporary sibling and a rename.
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), DataError> {
-    let name = path
-        .file_name()
-        .ok_or_else(|| DataError::OutputName {
-            path: path.to_path_buf(),
-        })?
-        .to_string_lossy();
-    let tmp = path.with_file_name(format!(".{name}.tmp-{}", std::process::id()));
-    let result = fs::write(&tmp, bytes)
-        .map_err(DataError::io(&tmp))
-        .and_then(|()| fs::rename(&tmp, path).map_err(DataError::io(path)));
-    if result.is_err() {
-        let _ = fs::remove_file(&tmp);
-    }
-    result
 }
 
 /// Refuse sequences that would not read back: ragged columns, wrong frame bytes, non-finite

@@ -1,0 +1,92 @@
+//! The probe's data: every step of some sequences encoded as a one-context set.
+use burn::tensor::{Device, Tensor};
+
+use crate::augment::{planar, Batch};
+use crate::data::{Normalization, Sequence, JOINTS};
+use crate::model::{tensors, Model, ModelError};
+
+/// Every step of some sequences encoded as a single context, per modality: the probe's data.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Encodings {
+    /// H: encoding width.
+    pub hidden: usize,
+    /// `K × H`: image context encodings.
+    pub image: Vec<f32>,
+    /// `K × H`: joint context encodings.
+    pub joint: Vec<f32>,
+    /// `K`: the true time (phase) of every step.
+    pub times: Vec<f32>,
+}
+
+/// Steps encoded per forward pass.
+const ENCODE_CHUNK: usize = 64;
+
+/// Encodes every step of `seqs` as a one-context set with `model`'s encoders (DMBN: e_m(t, x);
+/// DMBN-PTE: g_m(e_m(x) + P(t))), joints normalised with `normalization`. With `zero_time`
+/// the encoders are fed t = 0 instead of the step's time (the probe's Null row); the
+/// returned `times` are always the true ones.
+pub fn encode_steps(
+    model: &Model,
+    normalization: &Normalization,
+    seqs: &[Sequence],
+    zero_time: bool,
+) -> Result<Encodings, ModelError> {
+    let device = Device::flex();
+    let s = model.image_size();
+    let px = 3 * s * s;
+    let steps: Vec<(&Sequence, usize, f32)> = seqs
+        .iter()
+        .flat_map(|seq| {
+            let times = seq.times();
+            (0..seq.len()).map(move |k| (seq, k, times[k]))
+        })
+        .collect();
+    let mut out = Encodings {
+        hidden: 0,
+        image: Vec::new(),
+        joint: Vec::new(),
+        times: Vec::new(),
+    };
+    for chunk in steps.chunks(ENCODE_CHUNK) {
+        let b = chunk.len();
+        let mut batch = Batch {
+            batch: b,
+            contexts: 1,
+            targets: 1,
+            image_size: s,
+            context_images: vec![0.0; b * px],
+            context_joints: Vec::with_capacity(b * JOINTS),
+            context_times: Vec::with_capacity(b),
+            context_mask: vec![1.0; b],
+            target_images: Vec::new(),
+            target_joints: Vec::new(),
+            target_times: vec![0.0; b],
+            blend: vec![0.5; b],
+        };
+        for (i, &(seq, k, t)) in chunk.iter().enumerate() {
+            planar(
+                seq.frame(k),
+                s,
+                &mut batch.context_images[i * px..(i + 1) * px],
+            );
+            batch
+                .context_joints
+                .extend(normalization.normalize(&seq.joints[k]));
+            batch.context_times.push(if zero_time { 0.0 } else { t });
+            out.times.push(t);
+        }
+        let z = model.encode_contexts(&tensors(&batch, &device)?)?;
+        out.hidden = z.image.dims()[2];
+        out.image.extend(read(z.image));
+        out.joint.extend(read(z.joint));
+    }
+    Ok(out)
+}
+
+/// The values of `t` as `f32`s (empty if they cannot be read).
+pub(super) fn read<const D: usize>(t: Tensor<D>) -> Vec<f32> {
+    t.into_data()
+        .convert::<f32>()
+        .try_to_vec::<f32>()
+        .unwrap_or_default()
+}

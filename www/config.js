@@ -1,0 +1,37 @@
+// The page's constants: the models offered, frame size, chunking, playback, and the URL's test settings.
+
+/** Frame size of the shipped models; episodes are simulated at this size. */
+export const IMAGE_SIZE = 64;
+/** Playback: one recorded step is 3 physics substeps of 1/60 s, so 20 steps/s is real time. */
+export const STEPS_PER_SECOND = 20;
+/** Target times per predict call: the sequence fills in by this many steps at a time. */
+export const CHUNK = 10;
+export const BLENDS = { images: 1, joints: 0, both: 0.5 };
+/**
+ * The models the page offers, by id (the `#model` option values, the `model=` URL state, and
+ * the key of the weights, loading and caching): the label, the kind the file must hold (what
+ * `Model.kind` says) and the shipped file. The first is the default: the best model.
+ */
+export const MODELS = {
+  attn: { name: "Attentive (DMBN-PTE + attention)", kind: "attn", file: "attn-sim.dmbn" },
+  dmbn: { name: "DMBN", kind: "dmbn", file: "dmbn-sim.dmbn" },
+  pte: { name: "DMBN-PTE", kind: "pte", file: "pte-sim.dmbn" },
+  "pte-aug": { name: "DMBN-PTE + time warps", kind: "pte", file: "pte-aug-sim.dmbn" },
+};
+export const MODEL_NAMES = Object.fromEntries(Object.entries(MODELS).map(([id, m]) => [id, m.name]));
+/** What a model file holds (`Model.kind`), in words, for the mismatch note. */
+export const KIND_NAMES = { attn: "attentive", dmbn: "DMBN", pte: "DMBN-PTE" };
+
+/** The page's query at load; the URL state (url.js) is read from it once. */
+export const params = new URLSearchParams(location.search);
+/**
+ * Weight files by model id, each overridable for tests and experiments by a parameter named
+ * after the id: `?attn=URL`, `?dmbn=URL`, `?pte=URL`, `?pte-aug=URL` (relative to the page).
+ */
+export const WEIGHTS = Object.fromEntries(
+  Object.entries(MODELS).map(([id, m]) => [id, new URL(params.get(id) ?? `../assets/models/${m.file}`, location.href).href]),
+);
+/** Inference workers: one per core, at most 4 (`?workers=N`, 1 to 8). */
+export const WORKERS = Math.min(8, Math.max(1, Math.round(Number(params.get("workers"))) || Math.min(4, navigator.hardwareConcurrency || 2)));
+/** Debugging / screenshots: a pause in ms between predicted chunks (`?chunkDelay=200`). */
+export const CHUNK_DELAY = Math.max(0, Number(params.get("chunkDelay")) || 0);

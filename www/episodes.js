@@ -1,0 +1,101 @@
+// Episodes: simulating one on the main thread, and the sequence shown to the model under the mode.
+
+import { IMAGE_SIZE } from "./config.js";
+import { drawTableMap, show } from "./draw.js";
+import { chooseRandom, clampInt, mulberry32, updateObsInfo } from "./observations.js";
+import { play } from "./playback.js";
+import { cancelPrediction } from "./prediction.js";
+import { state } from "./state.js";
+import { clearError, showError } from "./status.js";
+import { ui } from "./ui.js";
+import { writeUrl } from "./url.js";
+import { rgbImage } from "./views.js";
+
+/** Simulates an episode; `place` [x, y] puts the object there, otherwise the seed places it. */
+export function generate(place = state.episode?.placed ? state.episode.object : null) {
+  const action = ui.action.value;
+  const seed = Number(ui.seed.value === "" ? NaN : ui.seed.value);
+  const t0 = performance.now();
+  let ep;
+  try {
+    if (place) {
+      const sim = state.wasm.Simulator.withObject(action, place[0], place[1], seed, IMAGE_SIZE);
+      ep = sim.run();
+    } else {
+      ep = state.wasm.runEpisode(action, seed, IMAGE_SIZE);
+    }
+  } catch (err) {
+    showError(err);
+    return false;
+  }
+  const ms = performance.now() - t0;
+  clearError();
+  cancelPrediction();
+  state.episode?.handle.free();
+  const object = ep.object();
+  const len = ep.len;
+  const episode = {
+    handle: ep,
+    action,
+    seed,
+    placed: Boolean(place),
+    len,
+    object: [object[0], object[1]],
+    end: [object[(len - 1) * 3], object[(len - 1) * 3 + 1]],
+    joints: ep.joints(),
+    digest: ep.digest(),
+    ms,
+  };
+  state.episode = episode;
+  state.timings.episode_ms = ms;
+  ui.freezeFrom.max = ui.freezeTo.max = String(len);
+  if (!(Number(ui.freezeTo.value) > 0) || Number(ui.freezeTo.value) > len) ui.freezeTo.value = String(len);
+  if (Number(ui.freezeFrom.value) >= len) ui.freezeFrom.value = String(Math.floor(len / 2));
+  ui.objectInfo.textContent =
+    `${len} steps simulated in ${ms < 10 ? ms.toFixed(1) : Math.round(ms)} ms · object at ` +
+    `(${episode.object[0].toFixed(3)}, ${episode.object[1].toFixed(3)}) m`;
+  ui.objectInfo.title = `episode sha256 ${episode.digest}`;
+  drawTableMap();
+  // Keep the chosen steps that the new episode has; otherwise "random k", seeded by the seed.
+  state.observed = new Set([...(state.pendingObserved ?? state.observed)].filter((k) => k < len));
+  state.pendingObserved = null;
+  if (!state.observed.size) chooseRandom(Number(ui.k.value), mulberry32(seed >>> 0));
+  updateObsInfo();
+  buildShown();
+  ui.scrubber.max = String(len - 1);
+  show(0);
+  writeUrl();
+  play();
+  return true;
+}
+
+/** The sequence shown to the model under the chosen mode (the p permutation uses the episode seed). */
+export function buildShown() {
+  const { episode } = state;
+  const mode = ui.mode.value;
+  ui.freeze.hidden = mode !== "f";
+  let ev;
+  try {
+    const from = clampInt(ui.freezeFrom.value, 0, episode.len - 1);
+    const to = clampInt(ui.freezeTo.value, from + 1, episode.len);
+    ev = mode === "f" ? episode.handle.evalSequence(mode, episode.seed, from, to) : episode.handle.evalSequence(mode, episode.seed);
+  } catch (err) {
+    showError(err);
+    return false;
+  }
+  const frames = ev.frames();
+  const size = IMAGE_SIZE;
+  const px = size * size * 3;
+  const images = [];
+  const sprite = document.createElement("canvas");
+  sprite.width = size * ev.len;
+  sprite.height = size;
+  const sg = sprite.getContext("2d");
+  for (let k = 0; k < ev.len; k++) {
+    images.push(rgbImage(frames, size, k * px));
+    sg.putImageData(images[k], k * size, 0);
+  }
+  state.shown = { mode, len: ev.len, size, frames, joints: ev.joints(), times: ev.times(), images, sprite };
+  ev.free();
+  return true;
+}

@@ -1,0 +1,138 @@
+// The pool of inference workers: starting them, loading models into them, dealing out chunks.
+
+import { failFatal } from "./status.js";
+
+/**
+ * A pool of inference workers (one per core, at most 4; `?workers=N` to choose). Each holds its
+ * own copy of the models; a prediction deals its chunks of target steps out round-robin, so
+ * the sequence still fills in from the start, several chunks at a time.
+ */
+export class Inference {
+  constructor(module, count) {
+    this.nextId = 1;
+    this.pending = new Map();
+    this.module = module;
+    this.count = count;
+    this.workers = [];
+    /** Resolves once the first worker runs WebAssembly (the others start after the first load). */
+    this.started = this.spawn().started;
+  }
+
+  spawn() {
+    const worker = new Worker(new URL("./worker.js", import.meta.url), { type: "module" });
+    worker.models = new Set();
+    worker.onmessage = (e) => this.receive(e.data);
+    worker.onerror = (e) => {
+      e.preventDefault?.();
+      this.fail(new Error(`The inference worker failed: ${e.message || "it could not be started (www/worker.js or ../pkg/dmbn.js did not load)"}.`));
+    };
+    worker.onmessageerror = () => this.fail(new Error("The inference worker sent a message the page could not read."));
+    worker.started = this.send(worker, { type: "init", module: this.module }).done;
+    worker.started.catch((err) => this.fail(err));
+    this.workers.push(worker);
+    return worker;
+  }
+
+  /** Sends a message to one worker: {id, done}, `done` resolving with its final reply. */
+  send(worker, msg, transfer = [], onChunk = null) {
+    const id = this.nextId++;
+    const done = new Promise((resolve, reject) => {
+      this.pending.set(id, { worker, resolve, reject, onChunk });
+      worker.postMessage({ ...msg, id }, transfer);
+    });
+    return { id, done };
+  }
+
+  receive(msg) {
+    // Replies to cancelled requests have no entry any more: dropped.
+    const entry = this.pending.get(msg.id);
+    if (!entry) return;
+    if (msg.type === "chunk") {
+      entry.onChunk?.(msg);
+      return;
+    }
+    this.pending.delete(msg.id);
+    if (msg.type === "error") entry.reject(new Error(msg.message));
+    else entry.resolve(msg);
+  }
+
+  fail(err) {
+    if (this.failed) return;
+    this.failed = err;
+    for (const entry of this.pending.values()) entry.reject(err);
+    this.pending.clear();
+    failFatal(err);
+  }
+
+  /** Stops request `id` (it resolves as cancelled). */
+  cancel(id) {
+    const entry = this.pending.get(id);
+    if (!entry) return;
+    this.pending.delete(id);
+    entry.resolve({ type: "cancelled", id });
+    entry.worker.postMessage({ type: "cancel", target: id });
+  }
+
+  /**
+   * Loads model `model` (an id of MODELS) from `url` in the first worker, resolving with its
+   * report, then in the others in the background (so that loading does not delay the page);
+   * predictions use the workers that have it.
+   */
+  async load(model, url) {
+    const [first] = this.workers;
+    const reply = await this.send(first, { type: "load", model, url }).done;
+    first.models.add(model);
+    while (this.workers.length < this.count) this.spawn();
+    for (const w of this.workers.slice(1)) {
+      this.send(w, { type: "load", model, url }).done.then(
+        () => w.models.add(model),
+        () => {}, // the first worker loaded the same file: this one just stays out of it
+      );
+    }
+    return reply;
+  }
+
+  /**
+   * Predicts `targets` with model `model` (an id) from the observations in chunks of `chunk`
+   * steps spread over the workers; `onChunk({start, count, mean, sigma, maxSigma, jointMean, jointSigma})`
+   * gets each chunk (`start` a step index of `targets`) as it arrives. Returns {done, cancel}: `done` resolves
+   * with {type: "done" | "cancelled", encodeMs, decodeMs, workers} (the slowest worker's
+   * times) or rejects with the first failure.
+   */
+  predict({ model, frames, joints, times, targets, blend, chunk, delay }, onChunk) {
+    const workers = this.workers.filter((w) => w.models.has(model));
+    const chunks = Math.ceil(targets.length / chunk);
+    const active = Math.max(1, Math.min(workers.length, chunks));
+    const requests = [];
+    for (let w = 0; w < active; w++) {
+      // Chunks w, w + active, w + 2·active, … of the targets, back to back.
+      const mine = [];
+      for (let c = w; c < chunks; c += active) mine.push(...targets.subarray(c * chunk, (c + 1) * chunk));
+      const part = Float32Array.from(mine);
+      const copies = [frames.slice(), joints.slice(), times.slice()];
+      const toGlobal = (start) => (w + (start / chunk) * active) * chunk;
+      requests.push(
+        this.send(
+          workers[w],
+          { type: "predict", model, frames: copies[0], joints: copies[1], times: copies[2], targets: part, blend, chunk, delay },
+          [...copies.map((a) => a.buffer), part.buffer],
+          (msg) => onChunk({ ...msg, start: toGlobal(msg.start) }),
+        ),
+      );
+    }
+    const cancel = () => requests.forEach((r) => this.cancel(r.id));
+    const done = Promise.all(requests.map((r) => r.done)).then(
+      (replies) => ({
+        type: replies.some((r) => r.type === "cancelled") ? "cancelled" : "done",
+        encodeMs: Math.max(...replies.map((r) => r.encodeMs ?? 0)),
+        decodeMs: Math.max(...replies.map((r) => (r.ms ?? 0) - (r.encodeMs ?? 0))),
+        workers: active,
+      }),
+      (err) => {
+        cancel();
+        throw err;
+      },
+    );
+    return { done, cancel };
+  }
+}

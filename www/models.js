@@ -1,0 +1,62 @@
+// The models' weights: loading each once into the workers, and the status line describing them.
+
+import { IMAGE_SIZE, KIND_NAMES, MODEL_NAMES, MODELS, WEIGHTS } from "./config.js";
+import { state } from "./state.js";
+import { clearError, setState, showError } from "./status.js";
+import { ui } from "./ui.js";
+
+/** Model id → promise of the workers' report on its weights; a failure is dropped, to retry. */
+const requests = new Map();
+
+/** Loads model `id` (a key of MODELS) into the workers once; resolves with the first worker's report. */
+export function loadModel(id) {
+  let p = requests.get(id);
+  if (!p) {
+    p = state.inference.load(id, WEIGHTS[id]).then((info) => {
+      if (info.imageSize !== IMAGE_SIZE) {
+        throw new Error(
+          `The ${MODEL_NAMES[id]} weights (${WEIGHTS[id]}) are for ${info.imageSize}×${info.imageSize} frames; this page simulates ${IMAGE_SIZE}×${IMAGE_SIZE}.`,
+        );
+      }
+      state.timings.models[id] = info;
+      state.loadedModels.add(id);
+      return info;
+    });
+    // Failures are not kept: choosing the model again retries.
+    p.catch(() => requests.delete(id));
+    requests.set(id, p);
+  }
+  return p;
+}
+
+function describeModel(id) {
+  const info = state.timings.models[id];
+  if (!info) return "";
+  const file = decodeURIComponent(new URL(WEIGHTS[id]).pathname.split("/").pop());
+  // The file should hold the kind of model the id names (pte-aug: a DMBN-PTE).
+  const mismatch =
+    info.fileKind !== MODELS[id].kind ? ` — note: the file holds a ${KIND_NAMES[info.fileKind] ?? info.fileKind} model` : "";
+  return `${MODEL_NAMES[id]} ready: ${file}, ${(info.bytes / 1e6).toFixed(1)} MB, loaded in ${Math.round(info.fetchMs + info.parseMs)} ms${mismatch}`;
+}
+
+/** Makes the chosen model available; shows progress and errors. Resolves to whether it is still the chosen one. */
+export async function selectModel() {
+  const id = ui.model.value;
+  if (!state.loadedModels.has(id)) {
+    setState("loading");
+    ui.status.textContent = `Loading the ${MODEL_NAMES[id]} weights…`;
+  }
+  try {
+    await loadModel(id);
+  } catch (err) {
+    if (ui.model.value === id) {
+      ui.status.textContent = "";
+      showError(err);
+    }
+    return false;
+  }
+  if (ui.model.value !== id) return false;
+  clearError();
+  ui.status.textContent = describeModel(id);
+  return true;
+}

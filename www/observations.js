@@ -1,0 +1,48 @@
+// The observed steps: choosing them (first k, random k) and listing them.
+
+import { state } from "./state.js";
+import { ui } from "./ui.js";
+
+/** A small seeded generator, so "random k" for a given seed is reproducible. */
+export function mulberry32(a) {
+  return () => {
+    a = (a + 0x6d2b79f5) | 0;
+    let t = Math.imul(a ^ (a >>> 15), 1 | a);
+    t = (t + Math.imul(t ^ (t >>> 7), 61 | t)) ^ t;
+    return ((t ^ (t >>> 14)) >>> 0) / 4294967296;
+  };
+}
+
+/** An input's value as an integer in [lo, hi] (lo when it is no number). */
+export function clampInt(v, lo, hi) {
+  const n = Math.round(Number(v));
+  return Math.min(hi, Math.max(lo, Number.isFinite(n) ? n : lo));
+}
+
+export function chooseFirst(k) {
+  const n = clampInt(k, 1, state.episode.len);
+  state.observed = new Set(Array.from({ length: n }, (_, i) => i));
+}
+
+export function chooseRandom(k, rand = Math.random) {
+  const len = state.episode.len;
+  const n = clampInt(k, 1, len);
+  const steps = Array.from({ length: len }, (_, i) => i);
+  for (let i = steps.length - 1; i > 0; i--) {
+    const j = Math.floor(rand() * (i + 1));
+    [steps[i], steps[j]] = [steps[j], steps[i]];
+  }
+  state.observed = new Set(steps.slice(0, n));
+}
+
+export function observedSteps() {
+  return [...state.observed].sort((a, b) => a - b);
+}
+
+export function updateObsInfo() {
+  const steps = observedSteps();
+  ui.obsInfo.textContent = steps.length
+    ? `${steps.length} observed: ${steps.length > 12 ? `${steps.slice(0, 12).join(", ")}, …` : steps.join(", ")}`
+    : "nothing observed: click frames on the timeline";
+  ui.predict.disabled = state.fatal || steps.length === 0;
+}

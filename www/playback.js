@@ -1,0 +1,40 @@
+// Playback of the shown sequence at real time, one animation frame at a time.
+
+import { STEPS_PER_SECOND } from "./config.js";
+import { show } from "./draw.js";
+import { state } from "./state.js";
+import { ui } from "./ui.js";
+
+export function play() {
+  if (!state.shown) return;
+  if (state.step >= state.shown.len - 1) show(0);
+  state.playing = true;
+  ui.play.textContent = "❚❚ Pause";
+  ui.play.setAttribute("aria-pressed", "true");
+  state.lastTick = performance.now();
+  requestAnimationFrame(tick);
+}
+
+export function pause() {
+  state.playing = false;
+  ui.play.textContent = "▶ Play";
+  ui.play.setAttribute("aria-pressed", "false");
+}
+
+export function toggle() {
+  state.playing ? pause() : play();
+}
+
+function tick(now) {
+  if (!state.playing || !state.shown) return;
+  const advance = Math.floor(((now - state.lastTick) * STEPS_PER_SECOND) / 1000);
+  if (advance > 0) {
+    state.lastTick += (advance * 1000) / STEPS_PER_SECOND;
+    show(state.step + advance);
+    if (state.step >= state.shown.len - 1) {
+      pause();
+      return;
+    }
+  }
+  requestAnimationFrame(tick);
+}

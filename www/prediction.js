@@ -1,0 +1,181 @@
+// Predicting the shown sequence: the request, its chunks as they come, cancelling, timings.
+
+import { BLENDS, CHUNK, CHUNK_DELAY, MODEL_NAMES, MODELS } from "./config.js";
+import { render } from "./draw.js";
+import { loadModel, selectModel } from "./models.js";
+import { observedSteps } from "./observations.js";
+import { JOINTS } from "./plot.js";
+import { state } from "./state.js";
+import { setState, settle, showError } from "./status.js";
+import { ui } from "./ui.js";
+
+export function cancelPrediction() {
+  if (state.prediction && !state.prediction.complete) state.prediction.cancel?.();
+  state.prediction = null;
+  ui.predLabel.textContent = "";
+}
+
+/** Settings changed: predict again when live, otherwise drop the outdated prediction. */
+export function invalidate() {
+  if (state.live && state.episode && state.observed.size) {
+    predict();
+  } else {
+    cancelPrediction();
+    render();
+    settle();
+  }
+}
+
+/** The shown sequence's frames, joints and time stamps at `steps`, as the model takes them. */
+function observations(steps) {
+  const { shown } = state;
+  const px = shown.size * shown.size * 3;
+  const frames = new Uint8Array(steps.length * px);
+  const joints = new Float32Array(steps.length * JOINTS);
+  const times = new Float32Array(steps.length);
+  steps.forEach((k, i) => {
+    frames.set(shown.frames.subarray(k * px, (k + 1) * px), i * px);
+    joints.set(shown.joints.subarray(k * JOINTS, (k + 1) * JOINTS), i * JOINTS);
+    times[i] = shown.times[k];
+  });
+  return { frames, joints, times };
+}
+
+/** Predicts every step of the shown sequence from the observed ones, drawing each chunk as it comes. */
+export async function predict() {
+  const { shown } = state;
+  if (state.fatal || !state.episode || !shown) return;
+  const steps = observedSteps();
+  if (!steps.length) {
+    showError("Choose at least one observation: click frames on the timeline, or use “first k” / “random k”.");
+    return;
+  }
+  state.live = true;
+  cancelPrediction();
+  const model = ui.model.value;
+  const observe = ui.observe.value;
+  const size = shown.size;
+  const px = size * size;
+  const { frames, joints, times } = observations(steps);
+  // Targets: the time stamps of the shown sequence, step by step (permuted for p).
+  const targets = Float32Array.from(shown.times);
+  const len = targets.length;
+  const p = {
+    model,
+    mode: shown.mode,
+    observe,
+    len,
+    size,
+    observed: steps.length,
+    done: new Uint8Array(len),
+    count: 0,
+    mean: new Uint8Array(len * px * 3),
+    sigma: new Float32Array(len * px),
+    jointMean: new Float32Array(len * JOINTS),
+    jointSigma: new Float32Array(len * JOINTS),
+    maxSigma: 0,
+    complete: false,
+    chunks: [],
+  };
+  state.prediction = p;
+  setState("predicting");
+  ui.predLabel.textContent = "predicting…";
+  if (!(await selectModel())) {
+    if (state.prediction === p) state.prediction = null;
+    return;
+  }
+  if (state.prediction !== p) return;
+  setState("predicting");
+  document.body.dataset.progress = "0";
+  p.start = performance.now();
+  const run = state.inference.predict(
+    { model, frames, joints, times, targets, blend: BLENDS[observe], chunk: CHUNK, delay: CHUNK_DELAY },
+    (chunk) => receiveChunk(p, chunk),
+  );
+  p.cancel = run.cancel;
+  let reply;
+  try {
+    reply = await run.done;
+  } catch (err) {
+    if (state.prediction === p) {
+      state.prediction = null;
+      render();
+      showError(err);
+    }
+    return;
+  }
+  if (reply.type === "cancelled" || state.prediction !== p) return;
+  finish(p, reply);
+}
+
+function receiveChunk(p, c) {
+  if (state.prediction !== p) return;
+  const px = p.size * p.size;
+  p.mean.set(c.mean, c.start * px * 3);
+  p.sigma.set(c.sigma, c.start * px);
+  p.jointMean.set(c.jointMean, c.start * JOINTS);
+  p.jointSigma.set(c.jointSigma, c.start * JOINTS);
+  p.maxSigma = Math.max(p.maxSigma, c.maxSigma);
+  p.done.fill(1, c.start, c.start + c.count);
+  p.count += c.count;
+  p.chunks.push(c.ms);
+  if (p.firstMs === undefined) p.firstMs = performance.now() - p.start;
+  document.body.dataset.progress = String(p.count);
+  ui.predLabel.textContent = `predicting… ${p.count} / ${p.len}`;
+  ui.timing.textContent = `${p.count} / ${p.len} steps · ${Math.round(performance.now() - p.start)} ms`;
+  render();
+}
+
+/** A prediction is complete: its timings, for the page and for automation. */
+function finish(p, reply) {
+  const { model, mode, observe, len } = p;
+  p.complete = true;
+  p.totalMs = performance.now() - p.start;
+  // A counter that automation can wait on: it changes with every finished prediction.
+  document.body.dataset.predictions = String(Number(document.body.dataset.predictions ?? 0) + 1);
+  state.timings.prediction = {
+    model,
+    mode,
+    observe,
+    observed: p.observed,
+    steps: len,
+    total_ms: p.totalMs,
+    per_frame_ms: p.totalMs / len,
+    first_chunk_ms: p.firstMs,
+    encode_ms: reply.encodeMs,
+    chunk: CHUNK,
+    workers: reply.workers,
+  };
+  ui.predLabel.textContent = "";
+  ui.timing.textContent =
+    `${len} steps in ${Math.round(p.totalMs)} ms (${(p.totalMs / len).toFixed(1)} ms per frame) · ` +
+    `first ${Math.min(CHUNK, len)} after ${Math.round(p.firstMs)} ms · ${reply.workers} worker${reply.workers > 1 ? "s" : ""}`;
+  ui.timing.title = `${MODEL_NAMES[model]}, mode ${mode}, ${observe}, ${p.observed} observed steps; encoding ${Math.round(reply.encodeMs)} ms`;
+  render();
+  settle();
+}
+
+/** For bench/page.mjs: times `n` target steps (evenly spaced phases) with model `model` (an id of
+ * MODELS: attn, dmbn, pte, pte-aug) on the current observations, through the same worker path and
+ * chunking as the page, without drawing. */
+export async function timePrediction(n, model = ui.model.value, chunk = CHUNK) {
+  if (!Object.hasOwn(MODELS, model)) {
+    throw new Error(`timePrediction: unknown model ${JSON.stringify(model)} (one of ${Object.keys(MODELS).join(", ")})`);
+  }
+  await loadModel(model);
+  const { frames, joints, times } = observations(observedSteps());
+  const targets = Float32Array.from({ length: n }, (_, i) => (n > 1 ? i / (n - 1) : 0.5));
+  const t0 = performance.now();
+  let first = null;
+  const reply = await state.inference.predict(
+    { model, frames, joints, times, targets, blend: BLENDS[ui.observe.value], chunk, delay: 0 },
+    () => (first ??= performance.now() - t0),
+  ).done;
+  return {
+    wall_ms: performance.now() - t0,
+    first_chunk_ms: first,
+    encode_ms: reply.encodeMs,
+    decode_ms: reply.decodeMs,
+    workers: reply.workers,
+  };
+}

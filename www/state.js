@@ -1,0 +1,37 @@
+// The page's mutable state, in one object that every module reads and writes.
+
+export const state = {
+  /** The wasm-bindgen glue, initialised on the main thread (the simulator). */
+  wasm: null,
+  /** The pool of inference workers (inference.js). */
+  inference: null,
+  /** Where an object may be placed: {x: [x0, x1], y: [y0, y1]} in metres. */
+  region: null,
+  /** The simulated episode: the wasm Episode (kept to derive t/p/f sequences) and what it was made from. */
+  episode: null,
+  /** The sequence shown to the model (the episode under the mode): frames, joints, times, images. */
+  shown: null,
+  /** Observed steps of the shown sequence. */
+  observed: new Set(),
+  /** Steps from the URL, used by the first episode. */
+  pendingObserved: null,
+  /** The prediction on screen (or filling in). */
+  prediction: null,
+  /** Once a prediction has been asked for, any change of settings predicts again. */
+  live: false,
+  /** Model ids whose weights the workers hold. */
+  loadedModels: new Set(),
+  /** The step on screen. */
+  step: 0,
+  playing: false,
+  /** Playback's clock: the time the current step was reached. */
+  lastTick: 0,
+  /** A failure the page cannot recover from: the controls stay disabled. */
+  fatal: false,
+  /** Client coordinates → step, timeline step, table point: set by each redraw. */
+  stepAt: () => 0,
+  timelineAt: () => -1,
+  tableAt: () => null,
+  /** Numbers for automation and the page benchmark (bench/page.mjs). */
+  timings: (window.dmbnTimings = { models: {}, prediction: null }),
+};

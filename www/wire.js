@@ -1,0 +1,140 @@
+// The controls, pointer and keys: what each input changes.
+
+import { drawTableMap, render, show, sigmaOverlay } from "./draw.js";
+import { buildShown, generate } from "./episodes.js";
+import { selectModel } from "./models.js";
+import { chooseFirst, chooseRandom, updateObsInfo } from "./observations.js";
+import { pause, toggle } from "./playback.js";
+import { cancelPrediction, invalidate, predict } from "./prediction.js";
+import { state } from "./state.js";
+import { clearError, settle } from "./status.js";
+import { ui } from "./ui.js";
+import { writeUrl } from "./url.js";
+
+/** The observed steps changed: list them, link them, and predict again when live. */
+export function observationsChanged() {
+  updateObsInfo();
+  writeUrl();
+  invalidate();
+}
+
+function toggleObserved(k) {
+  if (k < 0 || !state.shown) return;
+  if (state.observed.has(k)) state.observed.delete(k);
+  else state.observed.add(k);
+  observationsChanged();
+}
+
+function isTyping(el) {
+  return (
+    (el instanceof HTMLInputElement && !["range", "checkbox", "button"].includes(el.type)) ||
+    el instanceof HTMLSelectElement ||
+    el instanceof HTMLTextAreaElement
+  );
+}
+
+function onKey(e) {
+  const { shown } = state;
+  if (!shown || state.fatal || isTyping(e.target) || e.ctrlKey || e.metaKey || e.altKey) return;
+  const jump = e.shiftKey ? 10 : 1;
+  const keys = {
+    " ": toggle,
+    ArrowLeft: () => (pause(), show(state.step - jump)),
+    ArrowRight: () => (pause(), show(state.step + jump)),
+    Home: () => (pause(), show(0)),
+    End: () => (pause(), show(shown.len - 1)),
+  };
+  if (e.target === ui.timeline && e.key === "Enter") {
+    if (e.type === "keydown") toggleObserved(state.step);
+    e.preventDefault();
+    return;
+  }
+  const action = keys[e.key];
+  if (!action) return;
+  // Handled here, so a focused button or the scrubber does not act on the key as well.
+  e.preventDefault();
+  if (e.type === "keydown") action();
+}
+
+export function wire() {
+  document.getElementById("controls").addEventListener("submit", (e) => e.preventDefault());
+  ui.action.addEventListener("change", () => generate() && invalidate());
+  ui.seed.addEventListener("change", () => generate(null) && invalidate());
+  ui.random.addEventListener("click", () => {
+    ui.seed.value = String(Math.floor(Math.random() * 2 ** 31));
+    generate(null) && invalidate();
+  });
+  ui.table.addEventListener("click", (e) => {
+    const at = state.tableAt(e.clientX, e.clientY);
+    if (at && !state.fatal) generate(at) && invalidate();
+  });
+  ui.firstK.addEventListener("click", () => {
+    chooseFirst(ui.k.value);
+    observationsChanged();
+  });
+  ui.randomK.addEventListener("click", () => {
+    chooseRandom(ui.k.value);
+    observationsChanged();
+  });
+  ui.clearObs.addEventListener("click", () => {
+    state.observed = new Set();
+    observationsChanged();
+  });
+  ui.model.addEventListener("change", async () => {
+    writeUrl();
+    if (state.live) invalidate();
+    else {
+      cancelPrediction();
+      render();
+      if (await selectModel()) settle();
+    }
+  });
+  const modeChanged = () => {
+    if (!state.episode) return;
+    if (buildShown()) {
+      clearError();
+      show(state.step);
+      writeUrl();
+      invalidate();
+    }
+  };
+  ui.mode.addEventListener("change", modeChanged);
+  ui.freezeFrom.addEventListener("change", modeChanged);
+  ui.freezeTo.addEventListener("change", modeChanged);
+  ui.observe.addEventListener("change", () => {
+    writeUrl();
+    invalidate();
+  });
+  ui.predict.addEventListener("click", () => predict());
+  ui.sigmaToggle.addEventListener("change", sigmaOverlay);
+  ui.sigmaOpacity.addEventListener("input", sigmaOverlay);
+  ui.play.addEventListener("click", toggle);
+  ui.scrubber.addEventListener("input", () => {
+    pause();
+    show(Number(ui.scrubber.value));
+  });
+  ui.timeline.addEventListener("click", (e) => toggleObserved(state.timelineAt(e.clientX)));
+  ui.timeline.addEventListener("mousemove", (e) => {
+    const k = state.timelineAt(e.clientX);
+    ui.timeline.title = k < 0 ? "" : `step ${k}: click to ${state.observed.has(k) ? "stop observing it" : "observe it"}`;
+  });
+  const scrubPlot = (e) => {
+    if (!state.shown || !(e.buttons & 1)) return;
+    pause();
+    show(state.stepAt(e.clientX));
+  };
+  ui.plot.addEventListener("pointerdown", (e) => {
+    ui.plot.setPointerCapture(e.pointerId);
+    scrubPlot(e);
+  });
+  ui.plot.addEventListener("pointermove", scrubPlot);
+  addEventListener("keydown", onKey);
+  addEventListener("keyup", onKey);
+  const redraw = () => {
+    render();
+    if (state.region) drawTableMap();
+  };
+  new ResizeObserver(redraw).observe(ui.plot);
+  new ResizeObserver(redraw).observe(ui.timeline);
+  sigmaOverlay();
+}
