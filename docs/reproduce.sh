@@ -48,7 +48,7 @@ if [ "${TRAIN:-0}" = 1 ]; then
   for m in "${models[@]}"; do
     kind=${m%-aug}
     extra=()
-    [ "$m" = pte-aug ] && extra=(--augment)
+    [ "$m" = pte-aug ] && extra=(--augment --single-modality 0.3 --prefix-contexts 0.3)
     [ "$m" = attn ] && extra=(--single-modality 0.3 --prefix-contexts 0.3)
     # --resume continues an interrupted run; a finished one is left as it is.
     resume=()

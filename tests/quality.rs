@@ -23,7 +23,7 @@ use golden_score as golden;
 /// predate them, predict each action's
 /// mean motion and fail `shipped_simulator_models_use_their_observations` (their figures are
 /// in docs/results.md): each joins this list when it is retrained.
-const SHIPPED_SIM: [&str; 1] = ["pte-sim"];
+const SHIPPED_SIM: [&str; 2] = ["pte-sim", "pte-aug-sim"];
 
 #[test]
 fn default_model_reproduces_the_golden_scores() {

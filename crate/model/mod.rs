@@ -39,6 +39,7 @@ mod start;
 mod testing;
 mod time_embedding;
 mod time_projection;
+mod values;
 
 pub use crate::data::Normalization;
 pub use aggregation::{blend, masked_mean};
@@ -63,3 +64,4 @@ pub use prediction::{AttentiveContexts, ContextEncodings, Prediction, Representa
 pub use start::{FrameStart, JointStart, Start};
 pub use time_embedding::{TimeEmbedding, TimeEmbeddingConfig};
 pub use time_projection::{TimeProjection, TimeProjectionConfig};
+pub use values::values;

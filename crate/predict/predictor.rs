@@ -108,10 +108,10 @@ impl Predictor {
             let p = self.model.decode(representation, times)?;
             out.push(
                 chunk,
-                &read(p.image_mean),
-                &read(p.image_sigma),
-                &read(p.joint_mean),
-                &read(p.joint_sigma),
+                &model::values(p.image_mean),
+                &model::values(p.image_sigma),
+                &model::values(p.joint_mean),
+                &model::values(p.joint_sigma),
                 &self.normalization,
             );
         }
@@ -167,11 +167,3 @@ impl Predictor {
     }
 }
 
-/// A tensor's values as f32.
-fn read<const D: usize>(tensor: Tensor<D>) -> Vec<f32> {
-    tensor
-        .into_data()
-        .convert::<f32>()
-        .try_to_vec::<f32>()
-        .unwrap_or_default()
-}

@@ -1,9 +1,9 @@
 //! The probe's data: every step of some sequences encoded as a one-context set.
-use burn::tensor::{Device, Tensor};
+use burn::tensor::Device;
 
 use crate::augment::{planar, Batch};
 use crate::data::{Normalization, Sequence, JOINTS};
-use crate::model::{tensors, Model, ModelError};
+use crate::model::{tensors, values, Model, ModelError};
 
 /// Every step of some sequences encoded as a single context, per modality: the probe's data.
 #[derive(Debug, Clone, PartialEq)]
@@ -77,16 +77,8 @@ pub fn encode_steps(
         }
         let z = model.encode_contexts(&tensors(&batch, &device)?)?;
         out.hidden = z.image.dims()[2];
-        out.image.extend(read(z.image));
-        out.joint.extend(read(z.joint));
+        out.image.extend(values(z.image));
+        out.joint.extend(values(z.joint));
     }
     Ok(out)
-}
-
-/// The values of `t` as `f32`s (empty if they cannot be read).
-pub(super) fn read<const D: usize>(t: Tensor<D>) -> Vec<f32> {
-    t.into_data()
-        .convert::<f32>()
-        .try_to_vec::<f32>()
-        .unwrap_or_default()
 }

@@ -9,7 +9,8 @@ use rand::seq::index;
 use rand::SeedableRng;
 use rand_pcg::Pcg64;
 
-use super::encodings::{read, Encodings};
+use super::encodings::Encodings;
+use crate::model::values;
 use crate::eval::standardizer::Standardizer;
 
 /// The probe's regression head and how it is fitted.
@@ -103,7 +104,7 @@ pub fn fit_head(
     let plain = Device::flex();
     let x = Tensor::<2>::from_data(TensorData::new(x_test, [k, h]), &plain);
     let t = Tensor::<2>::from_data(TensorData::new(test.times.clone(), [k, 1]), &plain);
-    read((head.forward(x) - t).square().mean())
+    values((head.forward(x) - t).square().mean())
         .first()
         .map_or(f64::NAN, |&v| v as f64)
 }

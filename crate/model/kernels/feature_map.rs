@@ -22,13 +22,7 @@ pub(crate) enum Activation {
     Relu,
 }
 
-/// The values of a tensor, flat.
-pub(super) fn values<const D: usize>(t: Tensor<D>) -> Vec<f32> {
-    t.into_data()
-        .convert::<f32>()
-        .try_into_vec::<f32>()
-        .expect("f32 data")
-}
+pub(super) use crate::model::values;
 
 impl FeatureMap {
     /// From a channels-first `[K, C, H, W]` tensor.
