@@ -10,8 +10,8 @@ use rand::SeedableRng;
 use rand_pcg::Pcg64;
 
 use super::encodings::Encodings;
-use crate::model::values;
 use crate::eval::standardizer::Standardizer;
+use crate::model::values;
 
 /// The probe's regression head and how it is fitted.
 #[derive(Config, Debug)]
