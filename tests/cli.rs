@@ -13,6 +13,15 @@ fn dmbn(args: &[&str]) -> Output {
         .expect("run dmbn")
 }
 
+/// `dmbn simulate --out OUT --sequences N --seed S` and `extra`.
+fn simulate(out: &std::path::Path, sequences: u32, seed: u32, extra: &[&str]) -> Output {
+    let (n, s) = (sequences.to_string(), seed.to_string());
+    let mut args = vec!["simulate", "--out", out.to_str().unwrap()];
+    args.extend(["--sequences", &n, "--seed", &s]);
+    args.extend(extra);
+    dmbn(&args)
+}
+
 fn text(bytes: &[u8]) -> String {
     String::from_utf8_lossy(bytes).into_owned()
 }
@@ -152,17 +161,7 @@ fn simulate_is_reproducible_and_inspectable() {
     let mut trees = Vec::new();
     for name in ["a", "b"] {
         let out_dir = tmp.path().join(name);
-        let out = dmbn(&[
-            "simulate",
-            "--out",
-            out_dir.to_str().unwrap(),
-            "--sequences",
-            "2",
-            "--seed",
-            "1",
-            "--image-size",
-            "64",
-        ]);
+        let out = simulate(&out_dir, 2, 1, &["--image-size", "64"]);
         assert!(out.status.success(), "stderr: {}", text(&out.stderr));
         let stdout = text(&out.stdout);
         assert!(stdout.contains("wrote 4 sequences"), "{stdout}");
@@ -193,15 +192,7 @@ fn simulate_refuses_a_non_empty_output() {
     let out_dir = tmp.path().join("data");
     fs::create_dir(&out_dir).unwrap();
     fs::write(out_dir.join("keep.txt"), "precious").unwrap();
-    let out = dmbn(&[
-        "simulate",
-        "--out",
-        out_dir.to_str().unwrap(),
-        "--sequences",
-        "1",
-        "--seed",
-        "1",
-    ]);
+    let out = simulate(&out_dir, 1, 1, &[]);
     let stderr = text(&out.stderr);
     assert_eq!(out.status.code(), Some(1), "stderr: {stderr}");
     assert!(stderr.contains(out_dir.to_str().unwrap()), "{stderr}");
@@ -270,17 +261,7 @@ fn interrupted_simulate_leaves_no_dataset() {
 
     // That folder does not block a new run to the same --out, which writes the same episodes
     // (sequence i of seed S is the same in any run), completely.
-    let out = dmbn(&[
-        "simulate",
-        "--out",
-        out_dir.to_str().unwrap(),
-        "--sequences",
-        "1",
-        "--seed",
-        "7",
-        "--jobs",
-        "1",
-    ]);
+    let out = simulate(&out_dir, 1, 7, &["--jobs", "1"]);
     assert!(out.status.success(), "stderr: {}", text(&out.stderr));
     assert!(text(&out.stdout).contains("wrote 2 sequences"));
     assert_eq!(
