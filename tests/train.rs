@@ -90,15 +90,20 @@ fn deterministic(m: &Metrics) -> Metrics {
     }
 }
 
-/// The final model's prediction of a fixed episode: equal predictions, equal weights (the files
-/// may differ in parameter ids).
-fn final_prediction(out: &Path) -> dmbn::predict::SequencePrediction {
+/// The prediction of a fixed episode by the model file at `path`: equal predictions, equal
+/// weights (the files may differ in parameter ids).
+fn prediction(path: &Path) -> dmbn::predict::SequencePrediction {
     let seq = episode(Action::Grasp, 9, 64).unwrap();
     let observations = Observations::from_sequence(&seq, &[0, 30]).unwrap();
-    Predictor::load(out.join("model.dmbn"))
+    Predictor::load(path)
         .unwrap()
         .predict(&observations, &seq.times(), 0.5)
         .unwrap()
+}
+
+/// The final model's prediction (see [`prediction`]).
+fn final_prediction(out: &Path) -> dmbn::predict::SequencePrediction {
+    prediction(&out.join("model.dmbn"))
 }
 
 #[test]
@@ -253,12 +258,10 @@ fn the_quality_benchmark_keeps_the_best_model_on_held_out_sequences() {
         .unwrap();
     assert_eq!(trainer.best_quality(), Some(best));
     // best.dmbn is the model of that step: at the last step it is the final model too.
-    let best_model = Predictor::load(trainer.best_path()).unwrap();
-    let last = Predictor::load(out.join("model.dmbn")).unwrap();
-    let seq = episode(Action::Grasp, 9, 64).unwrap();
-    let observations = Observations::from_sequence(&seq, &[0, 30]).unwrap();
-    let predict = |p: &Predictor| p.predict(&observations, &seq.times(), 0.5).unwrap();
-    assert_eq!(predict(&best_model) == predict(&last), best.0 == 6);
+    assert_eq!(
+        prediction(&trainer.best_path()) == final_prediction(&out),
+        best.0 == 6
+    );
     let (_, _, state) = Checkpoint::read(&out).unwrap();
     assert_eq!(
         state.best_quality,
@@ -297,8 +300,6 @@ fn the_drawn_frame_weight_trains_the_attentive_model_s_own_frame_and_nothing_els
     let tmp = tempfile::tempdir().unwrap();
     let data = tmp.path().join("data");
     dataset(&data, 1);
-    let seq = episode(Action::Move, 9, 64).unwrap();
-    let observations = Observations::from_sequence(&seq, &[10, 50]).unwrap();
     for (model, moves) in [(ModelKind::Attn, true), (ModelKind::Dmbn, false)] {
         let run = |weight: f64| {
             let out = tmp.path().join(format!("{}-{weight}", model.name()));
@@ -308,10 +309,7 @@ fn the_drawn_frame_weight_trains_the_attentive_model_s_own_frame_and_nothing_els
                 .unwrap()
                 .run(false, |_| {})
                 .unwrap();
-            Predictor::load(out.join("model.dmbn"))
-                .unwrap()
-                .predict(&observations, &seq.times(), 0.5)
-                .unwrap()
+            final_prediction(&out)
         };
         let (without, with) = (run(0.0), run(50.0));
         // Only the attentive model draws a frame of its own for the term to train.

@@ -11,7 +11,8 @@ use dmbn::predict::Predictor;
 use crate::args::parse_ids;
 use crate::error::CliError;
 use crate::output::{create_dir, write, write_json};
-use crate::probe_sets::{check_split, id_list, probe_sets, TestSet};
+use crate::probe_sets::{check_split, probe_sets, TestSet};
+use dmbn::data::id_list;
 
 #[derive(Args)]
 pub struct ProbeArgs {

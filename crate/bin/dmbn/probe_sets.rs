@@ -1,7 +1,7 @@
 //! The training and test sets of `dmbn probe`, and the checks and warnings its split deserves.
 use std::path::{Path, PathBuf};
 
-use dmbn::data::{Dataset, Sequence};
+use dmbn::data::{id_list, Dataset, Sequence};
 use dmbn::eval::split_warnings;
 use dmbn::train::Split;
 
@@ -38,32 +38,6 @@ pub struct ProbeSet {
 impl ProbeSet {
     pub fn steps(&self) -> usize {
         self.sequences.iter().map(Sequence::len).sum()
-    }
-}
-
-/// `0-7, 9, 12-13`: ids, runs shortened.
-pub fn id_list(ids: &[u32]) -> String {
-    let mut ids = ids.to_vec();
-    ids.sort_unstable();
-    ids.dedup();
-    let mut parts = Vec::new();
-    let mut i = 0;
-    while i < ids.len() {
-        let mut j = i;
-        while j + 1 < ids.len() && ids[j + 1] == ids[j] + 1 {
-            j += 1;
-        }
-        parts.push(if i == j {
-            ids[i].to_string()
-        } else {
-            format!("{}-{}", ids[i], ids[j])
-        });
-        i = j + 1;
-    }
-    if parts.is_empty() {
-        "none".into()
-    } else {
-        parts.join(", ")
     }
 }
 

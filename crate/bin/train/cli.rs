@@ -6,6 +6,7 @@ use clap::{Parser, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 
 use dmbn::augment::TimeWarpConfig;
+use dmbn::data::id_list;
 use dmbn::model::ModelKind;
 use dmbn::train::{Schedule, TrainConfig, TrainError, Trainer};
 
@@ -212,7 +213,7 @@ fn run(args: Args) -> Result<(), TrainError> {
         trainer
             .data()
             .map_or("?".into(), |d| d.display().to_string()),
-        id_ranges(trainer.val_ids()),
+        id_list(trainer.val_ids()),
         args.out.display()
     );
     let path = trainer.run(args.half, |p| {
@@ -232,26 +233,4 @@ fn run(args: Args) -> Result<(), TrainError> {
         );
     }
     Ok(())
-}
-
-/// Sorted ids as ranges, `1800-1999` or `3, 7-9`.
-fn id_ranges(ids: &[u32]) -> String {
-    let mut ranges: Vec<(u32, u32)> = Vec::new();
-    for &id in ids {
-        match ranges.last_mut() {
-            Some((_, last)) if id == *last + 1 => *last = id,
-            _ => ranges.push((id, id)),
-        }
-    }
-    let parts: Vec<String> = ranges
-        .iter()
-        .map(|&(a, b)| {
-            if a == b {
-                a.to_string()
-            } else {
-                format!("{a}-{b}")
-            }
-        })
-        .collect();
-    parts.join(", ")
 }
