@@ -76,7 +76,7 @@ fn main() {
         let batch = tensors(&batch, &device).expect("valid batch");
         let train = median_ms(REPEATS, || {
             let prediction = model.forward(&batch).expect("forward");
-            let loss = model.loss(&prediction, &batch).expect("loss");
+            let loss = model.loss(&prediction, &batch, 0.0).expect("loss");
             let grads = GradientsParams::from_grads(loss.total.backward(), &model);
             model = optim.step(1e-4, model.clone(), grads);
         });

@@ -47,15 +47,14 @@ done
 if [ "${TRAIN:-0}" = 1 ]; then
   for m in "${models[@]}"; do
     kind=${m%-aug}
-    extra=()
-    [ "$m" = pte-aug ] && extra=(--augment --single-modality 0.3 --prefix-contexts 0.3)
-    [ "$m" = attn ] && extra=(--single-modality 0.3 --prefix-contexts 0.3)
+    extra=(--single-modality 0.3 --prefix-contexts 0.3)
+    [ "$m" = pte-aug ] && extra+=(--augment)
     # --resume continues an interrupted run; a finished one is left as it is.
     resume=()
     [ -f "$out/runs/$m/checkpoint/state.json" ] && resume=(--resume)
     "$bin/train" --data "$data" --model "$kind" "${extra[@]}" --out "$out/runs/$m" \
       --steps "$steps" --seed 1 --lr 1e-3 --schedule cosine --joint-weight 1 \
-      --contexts-in-targets --targets-per-sequence 8 --joint-targets 32 --val-every "$every" \
+      --contexts-in-targets --targets-per-sequence 8 --joint-targets 32 --beta-nll 1 --val-every "$every" \
       --checkpoint-every "$every" --val-fraction "$fraction" --half "${resume[@]}"
     file[$m]=$out/runs/$m/best.dmbn
   done

@@ -267,7 +267,7 @@ fn loss_is_finite_and_falls_when_overfitting_one_batch() {
         let mut mse = (None, f32::NAN);
         for _ in 0..50 {
             let prediction = model.forward(&t).unwrap();
-            let loss = model.loss(&prediction, &t).unwrap();
+            let loss = model.loss(&prediction, &t, 0.0).unwrap();
             let v = loss.values();
             assert!(v.total.is_finite() && v.image_nll.is_finite() && v.joint_nll.is_finite());
             assert!((v.total - (v.image_nll + 0.01 * v.joint_nll)).abs() < 1e-4);
@@ -626,7 +626,7 @@ fn bad_batches_give_clear_errors() {
     let model = model(ModelKind::Pte, 64, &device);
     let p = model.forward(&t).unwrap();
     assert!(matches!(
-        model.loss(&p, &t),
+        model.loss(&p, &t, 0.0),
         Err(ModelError::MissingTargets {
             field: "target_images"
         })

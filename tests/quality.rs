@@ -19,10 +19,9 @@ use dmbn::sim::{episode, Action};
 use golden_score as golden;
 
 /// The shipped simulator weights trained with the fixed initialisation and recipe that pass
-/// (`attn-sim`, the page's default, has its own test below). `dmbn-sim` and `pte-aug-sim`
-/// predate them, predict each action's
-/// mean motion and fail `shipped_simulator_models_use_their_observations` (their figures are
-/// in docs/results.md): each joins this list when it is retrained.
+/// (`attn-sim`, the page's default, has its own tests below). `dmbn-sim` predates them,
+/// predicts each action's mean motion and fails `shipped_simulator_models_use_their_observations`
+/// (its figures are in docs/results.md): it joins this list when it is retrained.
 const SHIPPED_SIM: [&str; 2] = ["pte-sim", "pte-aug-sim"];
 
 #[test]
@@ -239,7 +238,6 @@ fn the_default_model_beats_the_trivial_baselines() {
 /// The last bar: observing the first 30%, the frames of the rest at most half the error of
 /// holding the last observation.
 #[test]
-#[ignore = "issue 11: attn-sim forecasts frames at 0.74x hold-last's error, the bar is 0.5x (docs/results.md, Quality): run with --ignored"]
 fn the_default_model_halves_hold_last_s_frame_error_when_forecasting() {
     let (seqs, mean) = (unseen(), mean_motion());
     let predictor = Predictor::from_bytes(golden::MODEL).unwrap();

@@ -318,6 +318,29 @@ fn the_drawn_frame_weight_trains_the_attentive_model_s_own_frame_and_nothing_els
 }
 
 #[test]
+fn beta_nll_changes_the_training_and_not_the_reported_nll_s_definition() {
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("data");
+    dataset(&data, 1);
+    let run = |beta: f64| {
+        let out = tmp.path().join(format!("pte-{beta}"));
+        let mut config = small(ModelKind::Pte, 2);
+        config.beta_nll = beta;
+        let mut trainer = new_trainer(&data, &out, config).unwrap();
+        // The first step's loss parts come from the same weights and batch either way.
+        let (first, _) = trainer.step().unwrap();
+        trainer.run(false, |_| {}).unwrap();
+        (first, final_prediction(&out))
+    };
+    let ((plain, without), (weighted, with)) = (run(0.0), run(1.0));
+    assert_eq!(plain.image_nll, weighted.image_nll);
+    assert_eq!(plain.joint_nll, weighted.joint_nll);
+    // σ < 1, so the σ²-weighted total is the smaller, and the weights move differently.
+    assert!(weighted.total < plain.total, "{weighted:?} vs {plain:?}");
+    assert!(without != with);
+}
+
+#[test]
 fn bad_settings_are_refused() {
     let tmp = tempfile::tempdir().unwrap();
     let data = tmp.path().join("data");
@@ -342,6 +365,12 @@ fn bad_settings_are_refused() {
     config.drawn_frame_weight = f64::NAN;
     let err = new_trainer(&data, &out, config).err().unwrap();
     assert!(err.to_string().contains("drawn_frame_weight"), "{err}");
+    for beta in [-0.5, 1.5, f64::NAN] {
+        let mut config = small(ModelKind::Pte, 5);
+        config.beta_nll = beta;
+        let err = new_trainer(&data, &out, config).err().unwrap();
+        assert!(err.to_string().contains("beta_nll"), "{beta}: {err}");
+    }
     let err = new_trainer(&tmp.path().join("missing"), &out, small(ModelKind::Dmbn, 5))
         .err()
         .unwrap();

@@ -208,8 +208,14 @@ impl Model {
         self.decode(&representation, batch.target_times.clone())
     }
 
-    /// The loss of a prediction made for `batch`, which must hold target frames and joints.
-    pub fn loss(&self, prediction: &Prediction, batch: &BatchTensors) -> Result<Loss, ModelError> {
+    /// The loss of a prediction made for `batch`, which must hold target frames and joints;
+    /// its total as β-NLL when `beta` > 0 (see [`gaussian_loss`]).
+    pub fn loss(
+        &self,
+        prediction: &Prediction,
+        batch: &BatchTensors,
+        beta: f64,
+    ) -> Result<Loss, ModelError> {
         let images = batch
             .target_images
             .clone()
@@ -243,6 +249,7 @@ impl Model {
             images,
             joints,
             self.config.joint_weight,
+            beta,
         ))
     }
 

@@ -78,6 +78,11 @@ pub struct TrainConfig {
     /// shut, and a forecast far from the observations needs it everywhere); 0 for none.
     #[serde(default)]
     pub drawn_frame_weight: f64,
+    /// β of the β-NLL objective (see [`gaussian_loss`](crate::model::gaussian_loss)): each
+    /// value's NLL weighed by its σ^(2β), so that what the model is unsure of (the moving
+    /// arm) is learnt as well as what it is sure of; 0 for the paper's plain NLL.
+    #[serde(default)]
+    pub beta_nll: f64,
     /// Lower bound of the predicted σ.
     pub sigma_floor: f64,
     /// Fraction of sequence ids held out for validation.
@@ -117,6 +122,7 @@ impl TrainConfig {
             clip_norm: 1.0,
             joint_weight: 0.01,
             drawn_frame_weight: 0.0,
+            beta_nll: 0.0,
             sigma_floor: 0.01,
             val_fraction: 0.1,
             val_every: 200,

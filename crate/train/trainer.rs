@@ -215,7 +215,7 @@ impl Trainer {
         let prediction = self
             .model
             .decode(&representation, batch.target_times.clone())?;
-        let mut loss = self.model.loss(&prediction, &batch)?;
+        let mut loss = self.model.loss(&prediction, &batch, self.config.beta_nll)?;
         if let (Some(drawn), Some(frames)) = (&prediction.image_drawn, &batch.target_images) {
             if self.config.drawn_frame_weight > 0.0 {
                 let mse = (drawn.clone() - frames.clone()).square().mean();
@@ -225,7 +225,7 @@ impl Trainer {
         if joint_targets.targets > 0 {
             let (times, joints) = joint_target_tensors(&joint_targets, &self.device)?;
             let (mean, sigma) = self.model.decode_joints(&representation, times)?;
-            let nll = joint_nll(mean, sigma, joints);
+            let nll = joint_nll(mean, sigma, joints, self.config.beta_nll);
             loss.total = loss.total + nll.mul_scalar(self.config.joint_weight);
         }
         let values = loss.values();
@@ -267,7 +267,7 @@ impl Trainer {
         for batch in batches {
             let batch = tensors(batch, &self.device)?;
             let prediction = self.model.forward(&batch)?;
-            let v = self.model.loss(&prediction, &batch)?.values();
+            let v = self.model.loss(&prediction, &batch, 0.0)?.values();
             sum.total += v.total;
             sum.image_nll += v.image_nll;
             sum.joint_nll += v.joint_nll;
@@ -461,6 +461,12 @@ fn validate(config: &TrainConfig) -> Result<(), TrainError> {
         return Err(TrainError::config(
             "drawn_frame_weight",
             format!("{weight}: expected a finite value >= 0"),
+        ));
+    }
+    if !(0.0..=1.0).contains(&config.beta_nll) {
+        return Err(TrainError::config(
+            "beta_nll",
+            format!("{}: expected a value in [0, 1]", config.beta_nll),
         ));
     }
     if !(config.clip_norm.is_finite() && config.clip_norm > 0.0) {

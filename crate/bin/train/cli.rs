@@ -95,6 +95,11 @@ struct Args {
     /// where the gate is shut (forecasting far from the observations needs it).
     #[arg(long, default_value_t = 0.0)]
     drawn_frame_weight: f64,
+    /// β-NLL (Seitzer et al. 2022): each value's NLL weighed by its σ^(2β), in [0, 1]. The
+    /// plain NLL (0, the paper's) lets the pixels a model is sure of outweigh the moving arm
+    /// in the mean's gradient; 1 gives every mean the squared error's gradient.
+    #[arg(long, default_value_t = 0.0)]
+    beta_nll: f64,
     /// Lower bound of every predicted σ.
     #[arg(long, default_value_t = 0.01)]
     sigma_floor: f64,
@@ -191,6 +196,7 @@ fn run(args: Args) -> Result<(), TrainError> {
         config.clip_norm = args.clip_norm;
         config.joint_weight = args.joint_weight;
         config.drawn_frame_weight = args.drawn_frame_weight;
+        config.beta_nll = args.beta_nll;
         config.sigma_floor = args.sigma_floor;
         config.val_fraction = args.val_fraction;
         config.val_every = args.val_every;
