@@ -308,6 +308,10 @@ describe("demo page", () => {
     assert.equal(await page.getAttribute("#play", "aria-pressed"), "true");
     await page.keyboard.press("Space");
     assert.equal(await page.getAttribute("#play", "aria-pressed"), "false");
+    // Playing moved the step on (how far depends on the machine's speed): back to step 1.
+    await page.keyboard.press("Home");
+    await page.keyboard.press("ArrowRight");
+    assert.equal(await page.inputValue("#scrubber"), "1");
     // Enter on the focused timeline observes the current step (1), and stops observing it.
     const observed = () => page.evaluate(() => new URLSearchParams(location.search).get("obs").split(",").map(Number));
     const before = await observed();
