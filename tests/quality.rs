@@ -18,11 +18,9 @@ use dmbn::quality::{score_sequence, Accumulator, MeanMotion, Quality, Scenario, 
 use dmbn::sim::{episode, Action};
 use golden_score as golden;
 
-/// The shipped simulator weights trained with the fixed initialisation and recipe that pass
-/// (`attn-sim`, the page's default, has its own tests below). `dmbn-sim` predates them,
-/// predicts each action's mean motion and fails `shipped_simulator_models_use_their_observations`
-/// (its figures are in docs/results.md): it joins this list when it is retrained.
-const SHIPPED_SIM: [&str; 2] = ["pte-sim", "pte-aug-sim"];
+/// The shipped simulator weights besides `attn-sim` (the page's default, which has its own
+/// tests below): every one must read its observations.
+const SHIPPED_SIM: [&str; 3] = ["dmbn-sim", "pte-sim", "pte-aug-sim"];
 
 #[test]
 fn default_model_reproduces_the_golden_scores() {

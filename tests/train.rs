@@ -10,7 +10,7 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::Path;
 use std::sync::Mutex;
 
-use dmbn::model::ModelKind;
+use dmbn::model::{ModelConfig, ModelKind};
 use dmbn::predict::{Observations, Predictor};
 use dmbn::sim::{episode, Action};
 use dmbn::train::{Checkpoint, Metrics, Schedule, TrainConfig, TrainError, Trainer};
@@ -21,13 +21,14 @@ fn dataset(dir: &Path, n: u32) {
 }
 
 fn small(model: ModelKind, steps: u64) -> TrainConfig {
-    let mut c = TrainConfig::new(model, steps, 3);
+    let mut c = TrainConfig::new(ModelConfig::new(model), steps, 3);
     c.batch = 2;
     c.targets_per_sequence = 2;
     c.max_contexts = 3;
     c.val_batches = 1;
     c.val_every = 2;
     c.checkpoint_every = 2;
+    c.quality_sequences = 0;
     c
 }
 
@@ -351,7 +352,7 @@ fn bad_settings_are_refused() {
     let err = new_trainer(&data, &out, config).err().unwrap();
     assert!(err.to_string().contains("batch"), "{err}");
     let mut config = small(ModelKind::Dmbn, 5);
-    config.image_size = 100;
+    config.model.image_size = 100;
     assert!(new_trainer(&data, &out, config).is_err());
     let mut config = small(ModelKind::Attn, 5);
     config.single_modality = 1.5;

@@ -33,6 +33,84 @@ pub struct Batch {
 }
 
 impl Batch {
+    /// `b` sequences of `n` context slots (padding until [`Batch::set_context`] fills them)
+    /// and `m` targets whose frames and joints [`Batch::set_target`] fills: training and
+    /// evaluation. Every value zero, every blend 0.
+    pub fn with_targets(b: usize, n: usize, m: usize, s: usize) -> Batch {
+        let px = 3 * s * s;
+        Batch {
+            target_images: vec![0.0; b * m * px],
+            target_joints: vec![0.0; b * m * JOINTS],
+            ..Batch::contexts_only(b, n, m, s)
+        }
+    }
+
+    /// [`Batch::with_targets`] without target frames and joints (inference: only the target
+    /// times are known, and they are decoded separately).
+    pub fn contexts_only(b: usize, n: usize, m: usize, s: usize) -> Batch {
+        Batch {
+            batch: b,
+            contexts: n,
+            targets: m,
+            image_size: s,
+            context_images: vec![0.0; b * n * 3 * s * s],
+            context_joints: vec![0.0; b * n * JOINTS],
+            context_times: vec![0.0; b * n],
+            context_mask: vec![0.0; b * n],
+            target_images: Vec::new(),
+            target_joints: Vec::new(),
+            target_times: vec![0.0; b * m],
+            blend: vec![0.0; b],
+        }
+    }
+
+    /// Context slot `i` of sequence `b`: a frame (interleaved RGB bytes, `S × S × 3`), its
+    /// normalised joints and its time; the slot becomes real (mask 1).
+    pub fn set_context(
+        &mut self,
+        b: usize,
+        i: usize,
+        frame: &[u8],
+        joints: [f32; JOINTS],
+        time: f32,
+    ) {
+        let slot = b * self.contexts + i;
+        let s = self.image_size;
+        put(
+            s,
+            slot,
+            frame,
+            &joints,
+            &mut self.context_images,
+            &mut self.context_joints,
+        );
+        self.context_times[slot] = time;
+        self.context_mask[slot] = 1.0;
+    }
+
+    /// Target `j` of sequence `b` of a batch [`Batch::with_targets`]: its frame, normalised
+    /// joints and time.
+    pub fn set_target(
+        &mut self,
+        b: usize,
+        j: usize,
+        frame: &[u8],
+        joints: [f32; JOINTS],
+        time: f32,
+    ) {
+        let slot = b * self.targets + j;
+        let s = self.image_size;
+        put(
+            s,
+            slot,
+            frame,
+            &joints,
+            &mut self.target_images,
+            &mut self.target_joints,
+        );
+        self.target_times[slot] = time;
+    }
+
     /// The same contexts with themselves as targets (N targets per sequence, each sequence's
     /// real contexts repeated in order to fill the padding slots): how well a model reproduces
     /// what it observed.
@@ -63,6 +141,20 @@ impl Batch {
         }
         out
     }
+}
+
+/// One step's frame (`S`-pixel RGB bytes) and joints into slot `slot` of `images` and `values`.
+fn put(
+    s: usize,
+    slot: usize,
+    frame: &[u8],
+    joints: &[f32; JOINTS],
+    images: &mut [f32],
+    values: &mut [f32],
+) {
+    let px = 3 * s * s;
+    planar(frame, s, &mut images[slot * px..(slot + 1) * px]);
+    values[slot * JOINTS..(slot + 1) * JOINTS].copy_from_slice(joints);
 }
 
 /// Interleaved RGB bytes (`S × S × 3`) to channels-first floats in [0, 1] (`3 × S × S`).

@@ -4,7 +4,7 @@ use rand_pcg::Pcg64;
 
 use crate::data::{Normalization, Sequence, JOINTS};
 
-use super::{planar, Batch, JointTargets, TimeWarpConfig};
+use super::{Batch, JointTargets, TimeWarpConfig};
 
 /// How training batches are drawn (the original drew one sequence, 1-5 contexts and one
 /// target per step; we batch several sequences and targets).
@@ -73,7 +73,7 @@ impl Sampler {
         let picks: Vec<&Sequence> = (0..cfg.batch)
             .map(|_| &pool[rng.random_range(0..pool.len())])
             .collect();
-        let mut batch = empty(
+        let mut batch = Batch::with_targets(
             cfg.batch,
             cfg.max_contexts,
             cfg.targets,
@@ -145,7 +145,8 @@ impl Sampler {
         blend: f32,
         norm: &Normalization,
     ) -> Batch {
-        let mut batch = empty(1, contexts.len(), targets.len(), seq.image_size as usize);
+        let mut batch =
+            Batch::with_targets(1, contexts.len(), targets.len(), seq.image_size as usize);
         fill(&mut batch, 0, seq, contexts, targets, norm);
         batch.blend[0] = blend;
         batch
@@ -165,25 +166,6 @@ fn prefix_steps(rng: &mut Pcg64, t: usize, n: usize, targets: usize) -> Vec<usiz
     steps
 }
 
-/// A zeroed batch of the given dimensions.
-fn empty(b: usize, n: usize, m: usize, s: usize) -> Batch {
-    let px = 3 * s * s;
-    Batch {
-        batch: b,
-        contexts: n,
-        targets: m,
-        image_size: s,
-        context_images: vec![0.0; b * n * px],
-        context_joints: vec![0.0; b * n * JOINTS],
-        context_times: vec![0.0; b * n],
-        context_mask: vec![0.0; b * n],
-        target_images: vec![0.0; b * m * px],
-        target_joints: vec![0.0; b * m * JOINTS],
-        target_times: vec![0.0; b * m],
-        blend: vec![0.0; b],
-    }
-}
-
 /// Write sequence `seq`'s `contexts` and `targets` into slot `b` of `batch`.
 fn fill(
     batch: &mut Batch,
@@ -193,31 +175,12 @@ fn fill(
     targets: &[usize],
     norm: &Normalization,
 ) {
-    let (n, m, s) = (batch.contexts, batch.targets, batch.image_size);
-    let px = 3 * s * s;
     let times = seq.times();
     for (i, &k) in contexts.iter().enumerate() {
-        let slot = b * n + i;
-        planar(
-            seq.frame(k),
-            s,
-            &mut batch.context_images[slot * px..(slot + 1) * px],
-        );
-        batch.context_joints[slot * JOINTS..(slot + 1) * JOINTS]
-            .copy_from_slice(&norm.normalize(&seq.joints[k]));
-        batch.context_times[slot] = times[k];
-        batch.context_mask[slot] = 1.0;
+        batch.set_context(b, i, seq.frame(k), norm.normalize(&seq.joints[k]), times[k]);
     }
     for (j, &k) in targets.iter().enumerate() {
-        let slot = b * m + j;
-        planar(
-            seq.frame(k),
-            s,
-            &mut batch.target_images[slot * px..(slot + 1) * px],
-        );
-        batch.target_joints[slot * JOINTS..(slot + 1) * JOINTS]
-            .copy_from_slice(&norm.normalize(&seq.joints[k]));
-        batch.target_times[slot] = times[k];
+        batch.set_target(b, j, seq.frame(k), norm.normalize(&seq.joints[k]), times[k]);
     }
 }
 

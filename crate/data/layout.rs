@@ -1,6 +1,15 @@
 //! File names of the DMBN layout, in one place so the reader and writer cannot drift apart.
 use std::path::{Path, PathBuf};
 
+/// Frame sizes (pixels per side) the models work at and the simulator renders: the original
+/// DMBN's two. The reader resizes to any size; these are the ones a network is defined for.
+pub const IMAGE_SIZES: [usize; 2] = [64, 128];
+
+/// The supported sizes as words, for error messages: "64 or 128".
+pub fn image_sizes_text() -> String {
+    IMAGE_SIZES.map(|s| s.to_string()).join(" or ")
+}
+
 /// Largest frame size (pixels per side) the reader resizes to; guards against typos that would
 /// allocate gigabytes.
 pub const MAX_IMAGE_SIZE: u32 = 4096;

@@ -31,7 +31,10 @@ pub use dataset::Dataset;
 pub use dataset_writer::DatasetWriter;
 pub use error::DataError;
 pub use ids::id_list;
-pub use layout::{endpoint_path, joint_path, object_path, sequence_dir, MAX_IMAGE_SIZE};
+pub use layout::{
+    endpoint_path, image_sizes_text, joint_path, object_path, sequence_dir, IMAGE_SIZES,
+    MAX_IMAGE_SIZE,
+};
 pub use normalization::Normalization;
 pub use reader::read_sequence;
 pub use sequence::{Sequence, ENDPOINT, JOINTS};

@@ -1,4 +1,3 @@
-use burn::config::Config;
 use burn::module::Module;
 use burn::tensor::{Device, Tensor};
 
@@ -7,21 +6,7 @@ use super::decoder::{Decoder, DecoderConfig};
 use super::image_encoder::{ImageEncoder, ImageEncoderConfig};
 use super::joint_encoder::{JointEncoder, JointEncoderConfig};
 use super::prediction::per_target;
-use super::{BatchTensors, ContextEncodings, ModelError, Prediction};
-
-/// Configuration of a [`Dmbn`].
-#[derive(Config, Debug)]
-pub struct DmbnConfig {
-    /// Frame width and height: 64 or 128.
-    #[config(default = 64)]
-    pub image_size: usize,
-    /// Size of the context encodings and of the representation (H).
-    #[config(default = 128)]
-    pub hidden: usize,
-    /// Lower bound of every predicted σ.
-    #[config(default = 0.01)]
-    pub sigma_floor: f64,
-}
+use super::{BatchTensors, ContextEncodings, ModelConfig, ModelError, Prediction};
 
 /// The original Deep Modality Blending Network, "time as channel" (the paper's §3.1):
 ///
@@ -39,24 +24,22 @@ pub struct Dmbn {
     pub decoder: Decoder,
 }
 
-impl DmbnConfig {
-    /// Builds the network; fails on an unsupported image size.
-    pub fn init(&self, device: &Device) -> Result<Dmbn, ModelError> {
+impl Dmbn {
+    /// Builds the network from the model's config (its kind is not checked: see
+    /// [`ModelConfig::init`]); fails on an unsupported image size.
+    pub fn init(config: &ModelConfig, device: &Device) -> Result<Dmbn, ModelError> {
+        let hidden = config.hidden;
         Ok(Dmbn {
-            image_encoder: ImageEncoderConfig::new(4, encoder_filters(self.image_size)?)
-                .with_hidden(self.hidden)
+            image_encoder: ImageEncoderConfig::new(4, encoder_filters(config.image_size)?)
+                .with_hidden(hidden)
                 .init(device),
-            joint_encoder: JointEncoderConfig::new(8)
-                .with_hidden(self.hidden)
-                .init(device),
-            decoder: DecoderConfig::new(self.hidden + 1, decoder_filters(self.image_size)?)
-                .with_sigma_floor(self.sigma_floor)
+            joint_encoder: JointEncoderConfig::new(8).with_hidden(hidden).init(device),
+            decoder: DecoderConfig::new(hidden + 1, decoder_filters(config.image_size)?)
+                .with_sigma_floor(config.sigma_floor)
                 .init(device),
         })
     }
-}
 
-impl Dmbn {
     /// Every context slot's encoding per modality, `[B, N, H]` each (padding included).
     pub fn encode_contexts(&self, batch: &BatchTensors) -> ContextEncodings {
         let [b, n, c, s, _] = batch.context_images.dims();

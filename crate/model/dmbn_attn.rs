@@ -1,10 +1,9 @@
-use burn::config::Config;
 use burn::module::{Module, Param};
 use burn::nn::attention::{MhaInput, MultiHeadAttention, MultiHeadAttentionConfig};
 use burn::nn::Linear;
 use burn::tensor::{Device, Tensor};
 
-use super::config::{check_heads, decoder_filters, ATTENTION_HEADS};
+use super::config::{check_heads, decoder_filters};
 use super::context_projection::ContextProjection;
 use super::decoder::{Decoder, DecoderConfig};
 use super::dmbn_pte::{pte_context_encodings, pte_encoders, PteEncoders};
@@ -12,24 +11,9 @@ use super::image_encoder::ImageEncoder;
 use super::joint_encoder::JointEncoder;
 use super::time_embedding::{TimeEmbedding, TimeEmbeddingConfig};
 use super::time_projection::TimeProjection;
-use super::{AttentiveContexts, BatchTensors, ContextEncodings, ModelError, Prediction, Start};
-
-/// Configuration of a [`DmbnAttn`].
-#[derive(Config, Debug)]
-pub struct DmbnAttnConfig {
-    /// Frame width and height: 64 or 128.
-    #[config(default = 64)]
-    pub image_size: usize,
-    /// Size of the context encodings, of P(t) and of the representation (H).
-    #[config(default = 128)]
-    pub hidden: usize,
-    /// Attention heads (H must be a multiple).
-    #[config(default = "ATTENTION_HEADS")]
-    pub heads: usize,
-    /// Lower bound of every predicted σ.
-    #[config(default = 0.01)]
-    pub sigma_floor: f64,
-}
+use super::{
+    AttentiveContexts, BatchTensors, ContextEncodings, ModelConfig, ModelError, Prediction, Start,
+};
 
 /// The attentive model (`attn`): DMBN-PTE's context encodings, aggregated per target by
 /// cross-attention instead of a mean (Kim et al. 2019, "Attentive Neural Processes": a
@@ -76,35 +60,35 @@ pub struct DmbnAttn {
     pub decoder: Decoder,
 }
 
-impl DmbnAttnConfig {
-    /// Builds the network; fails on an unsupported image size or a head count that does not
-    /// divide H.
-    pub fn init(&self, device: &Device) -> Result<DmbnAttn, ModelError> {
-        check_heads(self.heads, self.hidden)?;
+impl DmbnAttn {
+    /// Builds the network from the model's config (its kind is not checked: see
+    /// [`ModelConfig::init`]); fails on an unsupported image size or a head count that does
+    /// not divide H.
+    pub fn init(config: &ModelConfig, device: &Device) -> Result<DmbnAttn, ModelError> {
+        let (hidden, heads) = (config.hidden, config.attention_heads());
+        check_heads(heads, hidden)?;
         let PteEncoders {
             image_encoder,
             joint_encoder,
             time,
             image_projection,
             joint_projection,
-        } = pte_encoders(self.image_size, self.hidden, device)?;
-        let attention = MultiHeadAttentionConfig::new(self.hidden, self.heads).with_dropout(0.0);
+        } = pte_encoders(config.image_size, hidden, device)?;
+        let attention = MultiHeadAttentionConfig::new(hidden, heads).with_dropout(0.0);
         Ok(DmbnAttn {
             image_encoder,
             joint_encoder,
             time,
             image_projection,
             joint_projection,
-            time_embedding: TimeEmbeddingConfig::new()
-                .with_hidden(self.hidden)
-                .init(device),
+            time_embedding: TimeEmbeddingConfig::new().with_hidden(hidden).init(device),
             image_attention: attention.init(device),
             joint_attention: attention.init(device),
-            observed: Param::from_tensor(Tensor::zeros([2, self.hidden], device)),
-            start_projection: super::init::dense(START_FEATURES, self.hidden, device),
+            observed: Param::from_tensor(Tensor::zeros([2, hidden], device)),
+            start_projection: super::init::dense(START_FEATURES, hidden, device),
             decoder: starting_at_the_observations(
-                DecoderConfig::new(self.hidden, decoder_filters(self.image_size)?)
-                    .with_sigma_floor(self.sigma_floor)
+                DecoderConfig::new(hidden, decoder_filters(config.image_size)?)
+                    .with_sigma_floor(config.sigma_floor)
                     .with_gated(true)
                     .init(device),
             ),

@@ -1,4 +1,3 @@
-use burn::config::Config;
 use burn::module::Module;
 use burn::tensor::{Device, Tensor};
 
@@ -9,21 +8,7 @@ use super::image_encoder::{ImageEncoder, ImageEncoderConfig};
 use super::joint_encoder::{JointEncoder, JointEncoderConfig};
 use super::prediction::per_target;
 use super::time_projection::{TimeProjection, TimeProjectionConfig};
-use super::{BatchTensors, ContextEncodings, ModelError, Prediction};
-
-/// Configuration of a [`DmbnPte`].
-#[derive(Config, Debug)]
-pub struct DmbnPteConfig {
-    /// Frame width and height: 64 or 128.
-    #[config(default = 64)]
-    pub image_size: usize,
-    /// Size of the context encodings, of P(t) and of the representation (H).
-    #[config(default = 128)]
-    pub hidden: usize,
-    /// Lower bound of every predicted σ.
-    #[config(default = 0.01)]
-    pub sigma_floor: f64,
-}
+use super::{BatchTensors, ContextEncodings, ModelConfig, ModelError, Prediction};
 
 /// DMBN with Positional Time Encoding, "time as context" (the paper's §3.2):
 ///
@@ -48,30 +33,29 @@ pub struct DmbnPte {
     pub decoder: Decoder,
 }
 
-impl DmbnPteConfig {
-    /// Builds the network; fails on an unsupported image size.
-    pub fn init(&self, device: &Device) -> Result<DmbnPte, ModelError> {
+impl DmbnPte {
+    /// Builds the network from the model's config (its kind is not checked: see
+    /// [`ModelConfig::init`]); fails on an unsupported image size.
+    pub fn init(config: &ModelConfig, device: &Device) -> Result<DmbnPte, ModelError> {
         let PteEncoders {
             image_encoder,
             joint_encoder,
             time,
             image_projection,
             joint_projection,
-        } = pte_encoders(self.image_size, self.hidden, device)?;
+        } = pte_encoders(config.image_size, config.hidden, device)?;
         Ok(DmbnPte {
             image_encoder,
             joint_encoder,
             time,
             image_projection,
             joint_projection,
-            decoder: DecoderConfig::new(self.hidden, decoder_filters(self.image_size)?)
-                .with_sigma_floor(self.sigma_floor)
+            decoder: DecoderConfig::new(config.hidden, decoder_filters(config.image_size)?)
+                .with_sigma_floor(config.sigma_floor)
                 .init(device),
         })
     }
-}
 
-impl DmbnPte {
     /// Every context slot's z per modality, `[B, N, H]` each (padding included).
     pub fn encode_contexts(&self, batch: &BatchTensors) -> ContextEncodings {
         pte_context_encodings(

@@ -1,9 +1,9 @@
 use burn::module::{Module, ModuleVisitor, Param};
 use burn::tensor::{Device, Tensor};
 
-use super::dmbn::{Dmbn, DmbnConfig};
-use super::dmbn_attn::{DmbnAttn, DmbnAttnConfig};
-use super::dmbn_pte::{DmbnPte, DmbnPteConfig};
+use super::dmbn::Dmbn;
+use super::dmbn_attn::DmbnAttn;
+use super::dmbn_pte::DmbnPte;
 use super::loss::{gaussian_loss, Loss};
 use super::{
     BatchTensors, ContextEncodings, Decoder, ImageEncoder, ModelConfig, ModelError, ModelKind,
@@ -40,28 +40,9 @@ impl ModelConfig {
     pub fn init(&self, device: &Device) -> Result<Model, ModelError> {
         self.validate()?;
         let network = match self.kind {
-            ModelKind::Dmbn => Network::Dmbn(
-                DmbnConfig::new()
-                    .with_image_size(self.image_size)
-                    .with_hidden(self.hidden)
-                    .with_sigma_floor(self.sigma_floor)
-                    .init(device)?,
-            ),
-            ModelKind::Pte => Network::Pte(
-                DmbnPteConfig::new()
-                    .with_image_size(self.image_size)
-                    .with_hidden(self.hidden)
-                    .with_sigma_floor(self.sigma_floor)
-                    .init(device)?,
-            ),
-            ModelKind::Attn => Network::Attn(
-                DmbnAttnConfig::new()
-                    .with_image_size(self.image_size)
-                    .with_hidden(self.hidden)
-                    .with_heads(self.attention_heads())
-                    .with_sigma_floor(self.sigma_floor)
-                    .init(device)?,
-            ),
+            ModelKind::Dmbn => Network::Dmbn(Dmbn::init(self, device)?),
+            ModelKind::Pte => Network::Pte(DmbnPte::init(self, device)?),
+            ModelKind::Attn => Network::Attn(DmbnAttn::init(self, device)?),
         };
         Ok(Model {
             network,

@@ -1,7 +1,7 @@
 use burn::tensor::{Device, Tensor, TensorData};
 
 use super::{Observations, SequencePrediction};
-use crate::augment::{planar, Batch};
+use crate::augment::Batch;
 use crate::data::JOINTS;
 use crate::model::{self, tensors, Model, ModelError, ModelKind, Normalization, Representation};
 
@@ -133,36 +133,14 @@ impl Predictor {
     /// at inference, and they are decoded separately).
     fn batch(&self, observations: &Observations, blend: f32) -> Batch {
         let (n, s) = (observations.len(), observations.image_size);
-        let px = 3 * s * s;
-        let mut context_images = vec![0.0; n * px];
-        for (frame, out) in observations
-            .frames
-            .chunks_exact(px)
-            .zip(context_images.chunks_exact_mut(px))
-        {
-            planar(frame, s, out);
+        let mut batch = Batch::contexts_only(1, n, 1, s);
+        let rows = observations.joints.chunks_exact(JOINTS);
+        let frames = observations.frames.chunks_exact(3 * s * s);
+        for (i, ((frame, row), &time)) in frames.zip(rows).zip(&observations.times).enumerate() {
+            let row: [f32; JOINTS] = std::array::from_fn(|j| row[j]);
+            batch.set_context(0, i, frame, self.normalization.normalize(&row), time);
         }
-        let context_joints = observations
-            .joints
-            .chunks_exact(JOINTS)
-            .flat_map(|row| {
-                let row: [f32; JOINTS] = std::array::from_fn(|j| row[j]);
-                self.normalization.normalize(&row)
-            })
-            .collect();
-        Batch {
-            batch: 1,
-            contexts: n,
-            targets: 1,
-            image_size: s,
-            context_images,
-            context_joints,
-            context_times: observations.times.clone(),
-            context_mask: vec![1.0; n],
-            target_images: Vec::new(),
-            target_joints: Vec::new(),
-            target_times: vec![0.0],
-            blend: vec![blend],
-        }
+        batch.blend[0] = blend;
+        batch
     }
 }

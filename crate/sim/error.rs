@@ -8,7 +8,10 @@ use crate::data::DataError;
 pub enum SimError {
     #[error("unknown action {0:?}: expected \"grasp\" or \"move\"")]
     UnknownAction(String),
-    #[error("image size {0} is not supported: expected 64 or 128")]
+    #[error(
+        "image size {0} is not supported: expected {sizes}",
+        sizes = crate::data::image_sizes_text()
+    )]
     ImageSize(u32),
     #[error("object position ({x}, {y}) is outside the placement region x in [{x0}, {x1}], y in [{y0}, {y1}]")]
     ObjectOutOfRegion {

@@ -2,7 +2,7 @@ use rand::{RngExt, SeedableRng};
 use rand_pcg::Pcg64;
 use rapier3d::math::Vector;
 
-use crate::data::Sequence;
+use crate::data::{Sequence, IMAGE_SIZES};
 
 use super::arm::ARM_JOINTS;
 use super::plan::Plan;
@@ -48,7 +48,7 @@ impl Simulator {
         seed: u64,
         image_size: u32,
     ) -> Result<Self, SimError> {
-        if image_size != 64 && image_size != 128 {
+        if !IMAGE_SIZES.contains(&(image_size as usize)) {
             return Err(SimError::ImageSize(image_size));
         }
         let (rx, ry) = Self::REGION;

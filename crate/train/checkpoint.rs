@@ -90,8 +90,76 @@ impl Checkpoint {
             });
         }
         let read = |name: &str| fs::read(dir.join(name)).map_err(|e| bad(format!("{name}: {e}")));
-        let state: CheckpointState = serde_json::from_slice(&read("state.json")?)
+        let json = read("state.json")?;
+        let state = serde_json::from_slice(&json)
+            .and_then(|mut state: CheckpointState| {
+                upgrade(&mut state.config, &json)?;
+                Ok(state)
+            })
             .map_err(|e| bad(format!("state.json: {e}")))?;
         Ok((read("model.dmbn")?, read("optimizer.bpk")?, state))
+    }
+}
+
+/// Settings of a `state.json` written before the run's settings held the whole model config:
+/// `"model": "pte"` (read as `ModelConfig::new(kind)`) beside these three.
+#[derive(Deserialize)]
+struct Legacy {
+    config: LegacyModel,
+}
+
+#[derive(Deserialize)]
+struct LegacyModel {
+    image_size: Option<usize>,
+    sigma_floor: Option<f64>,
+    joint_weight: Option<f64>,
+}
+
+/// Moves the model settings of such a `state.json` into `config.model`, so that those runs
+/// still resume as they were.
+fn upgrade(config: &mut TrainConfig, json: &[u8]) -> Result<(), serde_json::Error> {
+    let Legacy { config: legacy } = serde_json::from_slice(json)?;
+    let model = &mut config.model;
+    model.image_size = legacy.image_size.unwrap_or(model.image_size);
+    model.sigma_floor = legacy.sigma_floor.unwrap_or(model.sigma_floor);
+    model.joint_weight = legacy.joint_weight.unwrap_or(model.joint_weight);
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::ModelKind;
+
+    #[test]
+    fn settings_written_before_the_model_config_moved_in_still_read() {
+        let legacy = serde_json::json!({
+            "model": "attn", "image_size": 64, "seed": 1, "steps": 3000, "batch": 8,
+            "max_contexts": 5, "targets_per_sequence": 8, "lr": 0.001,
+            "schedule": { "kind": "cosine", "final_fraction": 0.05 }, "clip_norm": 1.0,
+            "joint_weight": 1.0, "sigma_floor": 0.02, "val_fraction": 0.1, "val_every": 250,
+            "val_batches": 8, "checkpoint_every": 250
+        });
+        let read = |config: &serde_json::Value| {
+            let json = serde_json::to_vec(&serde_json::json!({ "config": config })).unwrap();
+            let mut read: TrainConfig = serde_json::from_value(config.clone()).unwrap();
+            upgrade(&mut read, &json).unwrap();
+            read
+        };
+        let config = read(&legacy);
+        assert_eq!(config.model.kind, ModelKind::Attn);
+        assert_eq!(
+            (
+                config.model.joint_weight,
+                config.model.sigma_floor,
+                config.model.hidden
+            ),
+            (1.0, 0.02, 128)
+        );
+        assert_eq!((config.steps, config.targets_per_sequence), (3000, 8));
+        // Today's layout reads as it was written.
+        let mut today = config.clone();
+        today.model.joint_weight = 0.5;
+        assert_eq!(read(&serde_json::to_value(&today).unwrap()), today);
     }
 }

@@ -1,7 +1,7 @@
-use serde::{Deserialize, Serialize};
+use serde::{Deserialize, Deserializer, Serialize};
 
 use crate::augment::TimeWarpConfig;
-use crate::model::ModelKind;
+use crate::model::{ModelConfig, ModelKind};
 
 /// Learning-rate schedule over the run, a pure function of the step (so resuming needs no
 /// scheduler state).
@@ -35,10 +35,11 @@ impl Schedule {
 /// continues the same run.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct TrainConfig {
-    /// DMBN, DMBN-PTE or the attentive model.
-    pub model: ModelKind,
-    /// Frame size the model works at (frames are resized to it when read).
-    pub image_size: usize,
+    /// The model trained: kind, frame size (frames are resized to it when read), σ floor and
+    /// the joint NLL's weight in the loss. Checkpoints written before it held more than the
+    /// kind read as `ModelConfig::new(kind)`, and `Checkpoint::read` restores the rest.
+    #[serde(deserialize_with = "model_or_kind")]
+    pub model: ModelConfig,
     /// Seed of the weights, the split-independent batch sampling and the blending draws.
     pub seed: u64,
     /// Optimiser steps in the whole run.
@@ -71,8 +72,6 @@ pub struct TrainConfig {
     pub schedule: Schedule,
     /// Gradient clipping by global norm.
     pub clip_norm: f32,
-    /// Weight of the joint NLL in the loss.
-    pub joint_weight: f64,
     /// The attentive model: weight of the mean squared error of the frame it draws, before its
     /// gate mixes it with the observed ones (through the gate it learns only where the gate is
     /// shut, and a forecast far from the observations needs it everywhere); 0 for none.
@@ -83,8 +82,6 @@ pub struct TrainConfig {
     /// arm) is learnt as well as what it is sure of; 0 for the paper's plain NLL.
     #[serde(default)]
     pub beta_nll: f64,
-    /// Lower bound of the predicted σ.
-    pub sigma_floor: f64,
     /// Fraction of sequence ids held out for validation.
     pub val_fraction: f64,
     /// Validate every this many steps.
@@ -103,11 +100,11 @@ pub struct TrainConfig {
 }
 
 impl TrainConfig {
-    /// A run with the given model, seed and length and the defaults of the `train` binary.
-    pub fn new(model: ModelKind, steps: u64, seed: u64) -> TrainConfig {
+    /// A run with the given model, seed and length: the defaults, in one place (the `train`
+    /// binary's flags default to them).
+    pub fn new(model: ModelConfig, steps: u64, seed: u64) -> TrainConfig {
         TrainConfig {
             model,
-            image_size: 64,
             seed,
             steps,
             batch: 8,
@@ -120,16 +117,28 @@ impl TrainConfig {
             lr: 1e-4,
             schedule: Schedule::Constant,
             clip_norm: 1.0,
-            joint_weight: 0.01,
             drawn_frame_weight: 0.0,
             beta_nll: 0.0,
-            sigma_floor: 0.01,
             val_fraction: 0.1,
             val_every: 200,
             val_batches: 8,
             checkpoint_every: 500,
-            quality_sequences: 0,
+            quality_sequences: 10,
             augment: None,
         }
     }
+}
+
+/// A model config, or only a model kind (settings written before the config moved in).
+fn model_or_kind<'de, D: Deserializer<'de>>(d: D) -> Result<ModelConfig, D::Error> {
+    #[derive(Deserialize)]
+    #[serde(untagged)]
+    enum Model {
+        Config(ModelConfig),
+        Kind(ModelKind),
+    }
+    Ok(match Model::deserialize(d)? {
+        Model::Config(config) => config,
+        Model::Kind(kind) => ModelConfig::new(kind),
+    })
 }

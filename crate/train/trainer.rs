@@ -10,7 +10,7 @@ use rand_pcg::Pcg64;
 use crate::augment::{Batch, Sampler, SamplerConfig};
 use crate::data::{write_atomic, Sequence};
 use crate::model::{
-    self, joint_nll, joint_target_tensors, tensors, LossValues, Model, ModelConfig, Normalization,
+    self, joint_nll, joint_target_tensors, tensors, LossValues, Model, Normalization,
 };
 use crate::predict::Predictor;
 
@@ -64,11 +64,11 @@ impl Trainer {
             ));
         }
         std::fs::create_dir_all(out).map_err(TrainError::io(out))?;
-        let split = Split::load(data, config.image_size, config.val_fraction)?;
+        let split = Split::load(data, config.model.image_size, config.val_fraction)?;
         let normalization = Normalization::fit(split.train.iter().flat_map(|s| s.joints.iter()));
         let device = training_device();
         device.seed(config.seed);
-        let model = model_config(&config).init(&device)?;
+        let model = config.model.init(&device)?;
         model.draw_weights();
         let log = MetricsLog::open(&out.join("metrics.jsonl"), Some(0))?;
         let optim = optimizer(&config);
@@ -108,7 +108,11 @@ impl Trainer {
                 )
             })?,
         };
-        let split = Split::load(&data, state.config.image_size, state.config.val_fraction)?;
+        let split = Split::load(
+            &data,
+            state.config.model.image_size,
+            state.config.val_fraction,
+        )?;
         state.data = Some(data);
         let device = training_device();
         let (model, _, _) = model::load_bytes(&model_bytes, &device)?;
@@ -226,7 +230,7 @@ impl Trainer {
             let (times, joints) = joint_target_tensors(&joint_targets, &self.device)?;
             let (mean, sigma) = self.model.decode_joints(&representation, times)?;
             let nll = joint_nll(mean, sigma, joints, self.config.beta_nll);
-            loss.total = loss.total + nll.mul_scalar(self.config.joint_weight);
+            loss.total = loss.total + nll.mul_scalar(self.config.model.joint_weight);
         }
         let values = loss.values();
         if !values.total.is_finite() {
@@ -420,14 +424,6 @@ fn training_device() -> Device {
     device.autodiff()
 }
 
-/// The model a run trains.
-fn model_config(config: &TrainConfig) -> ModelConfig {
-    ModelConfig::new(config.model)
-        .with_image_size(config.image_size)
-        .with_sigma_floor(config.sigma_floor)
-        .with_joint_weight(config.joint_weight)
-}
-
 /// Adam with gradient clipping by global norm.
 fn optimizer(config: &TrainConfig) -> ModuleOptimizer {
     AdamConfig::new()
@@ -491,6 +487,6 @@ fn validate(config: &TrainConfig) -> Result<(), TrainError> {
         warp.validate()
             .map_err(|reason| TrainError::config("augment", reason.to_string()))?;
     }
-    model_config(config).validate()?;
+    config.model.validate()?;
     Ok(())
 }

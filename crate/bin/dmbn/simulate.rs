@@ -4,6 +4,7 @@ use std::thread;
 
 use clap::Args;
 
+use dmbn::data::{image_sizes_text, IMAGE_SIZES};
 use dmbn::sim::{self, Action};
 
 use crate::error::CliError;
@@ -33,9 +34,10 @@ pub struct SimulateArgs {
 
 fn parse_image_size(s: &str) -> Result<u32, String> {
     match s.parse::<u32>() {
-        Ok(n @ (64 | 128)) => Ok(n),
+        Ok(n) if IMAGE_SIZES.contains(&(n as usize)) => Ok(n),
         _ => Err(format!(
-            "{s:?} is not a supported image size: expected 64 or 128"
+            "{s:?} is not a supported image size: expected {}",
+            image_sizes_text()
         )),
     }
 }

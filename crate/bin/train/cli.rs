@@ -7,18 +7,8 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 use dmbn::augment::TimeWarpConfig;
 use dmbn::data::id_list;
-use dmbn::model::ModelKind;
+use dmbn::model::{ModelConfig, ModelKind};
 use dmbn::train::{Schedule, TrainConfig, TrainError, Trainer};
-
-#[derive(Clone, Copy, ValueEnum)]
-enum Kind {
-    /// DMBN, time as an input channel (the original).
-    Dmbn,
-    /// DMBN-PTE, positional time encoding (the paper's fix).
-    Pte,
-    /// The attentive model: DMBN-PTE's encodings, cross-attention over the context times.
-    Attn,
-}
 
 #[derive(Clone, Copy, ValueEnum)]
 enum ScheduleArg {
@@ -38,7 +28,7 @@ struct Args {
     data: Option<PathBuf>,
     /// Which network (with --resume, the checkpoint's: may be left out).
     #[arg(long, value_enum, required_unless_present = "resume")]
-    model: Option<Kind>,
+    model: Option<ModelKind>,
     /// Output folder for metrics, checkpoints and the final model.
     #[arg(long)]
     out: PathBuf,
@@ -49,13 +39,13 @@ struct Args {
     #[arg(long, default_value_t = 0)]
     seed: u64,
     /// Sequences per batch.
-    #[arg(long, default_value_t = 8)]
+    #[arg(long, default_value_t = defaults().batch)]
     batch: usize,
     /// Largest number of contexts per sequence (each draws 1..=max).
-    #[arg(long, default_value_t = 5)]
+    #[arg(long, default_value_t = defaults().max_contexts)]
     max_contexts: usize,
     /// Targets per sequence.
-    #[arg(long, default_value_t = 4)]
+    #[arg(long, default_value_t = defaults().targets_per_sequence)]
     targets_per_sequence: usize,
     /// Targets ⊇ contexts: each sequence's contexts lead its --targets-per-sequence targets
     /// (the reference CNP's training); otherwise every target is another step.
@@ -63,59 +53,59 @@ struct Args {
     contexts_in_targets: bool,
     /// Joint-only targets per sequence on top of the full ones: the joints are supervised at
     /// that many more steps, at a small cost (no frame is decoded for them).
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = defaults().joint_targets)]
     joint_targets: usize,
     /// Fraction of training sequences observed through one modality alone (blend c = 1 or 0,
     /// half each), so that frames-only and joints-only observation are trained; the rest draw
     /// c ~ U(0, 1).
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = defaults().single_modality)]
     single_modality: f32,
     /// Fraction of training sequences observed only in their first 10-90% (targets anywhere):
     /// forecasting the rest of an action from its start, as `dmbn score --scenario extrap`
     /// and the page's live mode ask.
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = defaults().prefix_contexts)]
     prefix_contexts: f32,
     /// Frame size the model works at (64 or 128; frames are resized when read).
-    #[arg(long, default_value_t = 64)]
+    #[arg(long, default_value_t = defaults().model.image_size)]
     image_size: usize,
     /// Base learning rate (Adam).
-    #[arg(long, default_value_t = 1e-4)]
+    #[arg(long, default_value_t = defaults().lr)]
     lr: f64,
     /// Learning-rate schedule.
     #[arg(long, value_enum, default_value = "constant")]
     schedule: ScheduleArg,
     /// Gradient clipping: largest global gradient norm.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = defaults().clip_norm)]
     clip_norm: f32,
     /// Weight of the joint NLL in the loss (the original's 0.01).
-    #[arg(long, default_value_t = 0.01)]
+    #[arg(long, default_value_t = defaults().model.joint_weight)]
     joint_weight: f64,
     /// The attentive model: weight of the mean squared error of the frame it draws before its
     /// gate mixes it with the observed ones, so that it learns to draw everywhere, not only
     /// where the gate is shut (forecasting far from the observations needs it).
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = defaults().drawn_frame_weight)]
     drawn_frame_weight: f64,
     /// β-NLL (Seitzer et al. 2022): each value's NLL weighed by its σ^(2β), in [0, 1]. The
     /// plain NLL (0, the paper's) lets the pixels a model is sure of outweigh the moving arm
     /// in the mean's gradient; 1 gives every mean the squared error's gradient.
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = defaults().beta_nll)]
     beta_nll: f64,
     /// Lower bound of every predicted σ.
-    #[arg(long, default_value_t = 0.01)]
+    #[arg(long, default_value_t = defaults().model.sigma_floor)]
     sigma_floor: f64,
     /// Fraction of sequence ids held out for validation.
-    #[arg(long, default_value_t = 0.1)]
+    #[arg(long, default_value_t = defaults().val_fraction)]
     val_fraction: f64,
     /// Validate every this many steps.
-    #[arg(long, default_value_t = 200)]
+    #[arg(long, default_value_t = defaults().val_every)]
     val_every: u64,
     /// Write a checkpoint every this many steps.
-    #[arg(long, default_value_t = 500)]
+    #[arg(long, default_value_t = defaults().checkpoint_every)]
     checkpoint_every: u64,
     /// Held-out sequences the quality benchmark (`dmbn score`'s interp and extrap against
     /// the trivial baselines) scores at each validation; the best model so far is kept as
     /// best.dmbn in --out. 0 turns it off.
-    #[arg(long, default_value_t = 10)]
+    #[arg(long, default_value_t = defaults().quality_sequences)]
     quality_sequences: usize,
     /// Continue the run in --out from its last checkpoint (same settings).
     #[arg(long)]
@@ -141,15 +131,16 @@ pub fn main() -> ExitCode {
     }
 }
 
+/// The flags' defaults: the library's, so that they are written once.
+fn defaults() -> TrainConfig {
+    TrainConfig::new(ModelConfig::new(ModelKind::Pte), 1, 0)
+}
+
 fn run(args: Args) -> Result<(), TrainError> {
-    let model = args.model.map(|kind| match kind {
-        Kind::Dmbn => ModelKind::Dmbn,
-        Kind::Pte => ModelKind::Pte,
-        Kind::Attn => ModelKind::Attn,
-    });
+    let model = args.model;
     let mut trainer = if args.resume {
         let trainer = Trainer::resume(args.data.as_deref(), &args.out, args.steps)?;
-        let trained = trainer.config().model;
+        let trained = trainer.config().model.kind;
         if model.is_some_and(|m| m != trained) {
             return Err(TrainError::config(
                 "model",
@@ -173,6 +164,10 @@ fn run(args: Args) -> Result<(), TrainError> {
                 "missing: pass --model and --data",
             ));
         };
+        let model = ModelConfig::new(model)
+            .with_image_size(args.image_size)
+            .with_joint_weight(args.joint_weight)
+            .with_sigma_floor(args.sigma_floor);
         let mut config = TrainConfig::new(model, steps, args.seed);
         config.batch = args.batch;
         config.max_contexts = args.max_contexts;
@@ -181,7 +176,6 @@ fn run(args: Args) -> Result<(), TrainError> {
         config.joint_targets = args.joint_targets;
         config.single_modality = args.single_modality;
         config.prefix_contexts = args.prefix_contexts;
-        config.image_size = args.image_size;
         config.lr = args.lr;
         config.schedule = match args.schedule {
             ScheduleArg::Constant => Schedule::Constant,
@@ -194,10 +188,8 @@ fn run(args: Args) -> Result<(), TrainError> {
             },
         };
         config.clip_norm = args.clip_norm;
-        config.joint_weight = args.joint_weight;
         config.drawn_frame_weight = args.drawn_frame_weight;
         config.beta_nll = args.beta_nll;
-        config.sigma_floor = args.sigma_floor;
         config.val_fraction = args.val_fraction;
         config.val_every = args.val_every;
         config.checkpoint_every = args.checkpoint_every;
@@ -215,7 +207,7 @@ fn run(args: Args) -> Result<(), TrainError> {
     );
     eprintln!(
         "training {} on {} (validation ids {}), output in {}",
-        trainer.config().model,
+        trainer.config().model.kind,
         trainer
             .data()
             .map_or("?".into(), |d| d.display().to_string()),

@@ -1,8 +1,8 @@
 //! The probe's data: every step of some sequences encoded as a one-context set.
 use burn::tensor::Device;
 
-use crate::augment::{planar, Batch};
-use crate::data::{Normalization, Sequence, JOINTS};
+use crate::augment::Batch;
+use crate::data::{Normalization, Sequence};
 use crate::model::{tensors, values, Model, ModelError};
 
 /// Every step of some sequences encoded as a single context, per modality: the probe's data.
@@ -33,7 +33,6 @@ pub fn encode_steps(
 ) -> Result<Encodings, ModelError> {
     let device = Device::flex();
     let s = model.image_size();
-    let px = 3 * s * s;
     let steps: Vec<(&Sequence, usize, f32)> = seqs
         .iter()
         .flat_map(|seq| {
@@ -49,30 +48,17 @@ pub fn encode_steps(
     };
     for chunk in steps.chunks(ENCODE_CHUNK) {
         let b = chunk.len();
-        let mut batch = Batch {
-            batch: b,
-            contexts: 1,
-            targets: 1,
-            image_size: s,
-            context_images: vec![0.0; b * px],
-            context_joints: Vec::with_capacity(b * JOINTS),
-            context_times: Vec::with_capacity(b),
-            context_mask: vec![1.0; b],
-            target_images: Vec::new(),
-            target_joints: Vec::new(),
-            target_times: vec![0.0; b],
-            blend: vec![0.5; b],
-        };
+        let mut batch = Batch::contexts_only(b, 1, 1, s);
+        batch.blend.fill(0.5);
         for (i, &(seq, k, t)) in chunk.iter().enumerate() {
-            planar(
+            let time = if zero_time { 0.0 } else { t };
+            batch.set_context(
+                i,
+                0,
                 seq.frame(k),
-                s,
-                &mut batch.context_images[i * px..(i + 1) * px],
+                normalization.normalize(&seq.joints[k]),
+                time,
             );
-            batch
-                .context_joints
-                .extend(normalization.normalize(&seq.joints[k]));
-            batch.context_times.push(if zero_time { 0.0 } else { t });
             out.times.push(t);
         }
         let z = model.encode_contexts(&tensors(&batch, &device)?)?;
