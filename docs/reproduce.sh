@@ -62,8 +62,9 @@ fi
 
 # Table 1: DMBN against DMBN-PTE with and without augmentation. On the original data the
 # heads are fitted on ids 0-31 and tested on 32-39. The simulator's 4,000 sequences would take
-# an hour per probe: its heads are fitted on 200 training episodes (seeds 1000-1199, ids 0-199
-# of sim2000) and tested on 20 held-out ones (seeds 2980-2999, ids 1980-1999), made here.
+# an hour per probe: its heads are fitted on the 400 training episodes of seeds 1000-1199 (ids
+# 0-199 of sim2000) and tested on the 40 held-out ones of seeds 2980-2999 (ids 1980-1999),
+# made here.
 probe_split=(--test-fraction "$fraction")
 probe_data=$data
 if [ "$set_name" = sim ]; then

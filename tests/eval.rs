@@ -10,7 +10,7 @@ use burn::tensor::Device;
 use dmbn::data::Normalization;
 use dmbn::eval::{
     diverged, evenly_spaced, fit_head, mean_ci95, split_warnings, time_variance, Divergence,
-    Encodings, HeadConfig, ProbeReport, ProbeResult, ProbeRow, DIVERGENCE_FACTOR,
+    HeadConfig, ProbeReport, ProbeResult, ProbeRow, StepEncodings, DIVERGENCE_FACTOR,
 };
 use dmbn::model::{ModelConfig, ModelKind};
 use dmbn::sim::Action;
@@ -18,7 +18,7 @@ use rand::{RngExt, SeedableRng};
 use rand_pcg::Pcg64;
 
 /// `k` encodings of width 8 at uniform random times; `with_time` puts t (and t²) in them.
-fn synthetic(k: usize, with_time: bool, seed: u64) -> Encodings {
+fn synthetic(k: usize, with_time: bool, seed: u64) -> StepEncodings {
     let mut rng = Pcg64::seed_from_u64(seed);
     let times: Vec<f32> = (0..k).map(|_| rng.random_range(0.0..1.0)).collect();
     let mut image = Vec::new();
@@ -31,7 +31,7 @@ fn synthetic(k: usize, with_time: bool, seed: u64) -> Encodings {
             image.extend(noise);
         }
     }
-    Encodings {
+    StepEncodings {
         hidden: 8,
         joint: image.clone(),
         image,
@@ -65,7 +65,7 @@ fn the_probe_head_reads_time_when_it_is_there_and_not_otherwise() {
 }
 
 /// `e` with feature `j` of every step (both modalities) set to `value(step)`.
-fn with_feature(mut e: Encodings, j: usize, value: impl Fn(usize) -> f32) -> Encodings {
+fn with_feature(mut e: StepEncodings, j: usize, value: impl Fn(usize) -> f32) -> StepEncodings {
     let h = e.hidden;
     for k in 0..e.times.len() {
         e.image[k * h + j] = value(k);
@@ -97,7 +97,7 @@ fn a_feature_constant_on_the_training_steps_cannot_blow_the_probe_up() {
         }
     }
     // A whole encoding on a tiny scale is standardised as usual (the floor is relative).
-    let tiny = |mut e: Encodings| {
+    let tiny = |mut e: StepEncodings| {
         e.image.iter_mut().for_each(|v| *v *= 1e-5);
         e
     };
@@ -118,7 +118,7 @@ fn a_feature_constant_on_the_training_steps_cannot_blow_the_probe_up() {
         }
     });
     assert!(fit_head(&train, &synthetic(50, true, 2), true, &head, 0).is_finite());
-    let empty = Encodings {
+    let empty = StepEncodings {
         hidden: 8,
         image: Vec::new(),
         joint: Vec::new(),

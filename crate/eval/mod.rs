@@ -9,8 +9,8 @@ mod standardizer;
 pub use confidence::{mean_ci95, MeanCi};
 pub use evaluation::{evaluate, evenly_spaced, Evaluation};
 pub use probe::{
-    diverged, encode_steps, fit_head, probe, split_warnings, time_variance, Divergence, Encodings,
-    HeadConfig, ProbeConfig, ProbeReport, ProbeResult, ProbeRow, DIVERGENCE_FACTOR, MIN_TEST_IDS,
-    MIN_TEST_STEPS, MIN_TRAIN_IDS,
+    diverged, encode_steps, fit_head, probe, split_warnings, time_variance, Divergence, HeadConfig,
+    ProbeConfig, ProbeReport, ProbeResult, ProbeRow, StepEncodings, DIVERGENCE_FACTOR,
+    MIN_TEST_IDS, MIN_TEST_STEPS, MIN_TRAIN_IDS,
 };
 pub use standardizer::{ABS_STD_FLOOR, REL_STD_FLOOR, STANDARD_CLIP};

@@ -7,7 +7,7 @@ use crate::model::{tensors, values, Model, ModelError};
 
 /// Every step of some sequences encoded as a single context, per modality: the probe's data.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Encodings {
+pub struct StepEncodings {
     /// H: encoding width.
     pub hidden: usize,
     /// `K × H`: image context encodings.
@@ -30,7 +30,7 @@ pub fn encode_steps(
     normalization: &Normalization,
     seqs: &[Sequence],
     zero_time: bool,
-) -> Result<Encodings, ModelError> {
+) -> Result<StepEncodings, ModelError> {
     let device = Device::flex();
     let s = model.image_size();
     let steps: Vec<(&Sequence, usize, f32)> = seqs
@@ -40,7 +40,7 @@ pub fn encode_steps(
             (0..seq.len()).map(move |k| (seq, k, times[k]))
         })
         .collect();
-    let mut out = Encodings {
+    let mut out = StepEncodings {
         hidden: 0,
         image: Vec::new(),
         joint: Vec::new(),

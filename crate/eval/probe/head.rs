@@ -9,7 +9,7 @@ use rand::seq::index;
 use rand::SeedableRng;
 use rand_pcg::Pcg64;
 
-use super::encodings::Encodings;
+use super::encodings::StepEncodings;
 use crate::eval::standardizer::Standardizer;
 use crate::model::values;
 
@@ -48,13 +48,13 @@ impl Head {
 /// and returns its mean squared error on `test`. `image` picks the image or the joint
 /// encodings. Deterministic for a seed; NaN when either set is empty or the widths differ.
 pub fn fit_head(
-    train: &Encodings,
-    test: &Encodings,
+    train: &StepEncodings,
+    test: &StepEncodings,
     image: bool,
     config: &HeadConfig,
     seed: u64,
 ) -> f64 {
-    let pick = |e: &Encodings| {
+    let pick = |e: &StepEncodings| {
         if image {
             e.image.clone()
         } else {

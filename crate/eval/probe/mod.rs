@@ -11,7 +11,7 @@ pub use checks::{
     diverged, split_warnings, time_variance, DIVERGENCE_FACTOR, MIN_TEST_IDS, MIN_TEST_STEPS,
     MIN_TRAIN_IDS,
 };
-pub use encodings::{encode_steps, Encodings};
+pub use encodings::{encode_steps, StepEncodings};
 pub use head::{fit_head, HeadConfig};
 pub use report::{Divergence, ProbeReport, ProbeResult, ProbeRow};
 pub use run::{probe, ProbeConfig};
