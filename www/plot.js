@@ -8,8 +8,11 @@ export const JOINT_NAMES = ["base", "shoulder", "elbow", "wrist 1", "wrist 2", "
 export const JOINT_UNITS = ["rad", "rad", "rad", "rad", "rad", "rad", "m"];
 export const JOINT_COLORS = ["#ff6b6b", "#ffa94d", "#ffd43b", "#69db7c", "#4dabf7", "#b197fc", "#f783ac"];
 
+// 4 × 2 panels (the 8th holds the legend), or 2 × 4 on a narrow screen (a phone), where four
+// columns would squeeze each curve into a sliver.
 const COLS = 4;
-const ROWS = 2;
+const NARROW_COLS = 2;
+const NARROW = 560;
 const GAP = { x: 14, y: 12 };
 const PAD = { left: 40, right: 6, top: 18, bottom: 16 };
 const MUTED = "#8b93a3";
@@ -23,11 +26,14 @@ const TRUE = "#e6e9ef";
  */
 export function drawJoints(canvas, data) {
   const { g, w, h } = fit(canvas);
-  const cw = (w - GAP.x * (COLS - 1)) / COLS;
-  const ch = (h - GAP.y * (ROWS - 1)) / ROWS;
+  const cols = w < NARROW ? NARROW_COLS : COLS;
+  const rows = Math.ceil((JOINTS + 1) / cols);
+  canvas.dataset.columns = String(cols);
+  const cw = (w - GAP.x * (cols - 1)) / cols;
+  const ch = (h - GAP.y * (rows - 1)) / rows;
   const cells = [];
-  for (let j = 0; j < COLS * ROWS; j++) {
-    cells.push({ x: (j % COLS) * (cw + GAP.x), y: Math.floor(j / COLS) * (ch + GAP.y), w: cw, h: ch });
+  for (let j = 0; j < cols * rows; j++) {
+    cells.push({ x: (j % cols) * (cw + GAP.x), y: Math.floor(j / cols) * (ch + GAP.y), w: cw, h: ch });
   }
   drawLegend(g, cells[JOINTS]);
   if (!data || data.len < 1) return () => 0;
@@ -37,7 +43,7 @@ export function drawJoints(canvas, data) {
   return (clientX) => {
     const rect = canvas.getBoundingClientRect();
     const x = clientX - rect.left;
-    const col = Math.min(COLS - 1, Math.max(0, Math.floor(x / (cw + GAP.x))));
+    const col = Math.min(cols - 1, Math.max(0, Math.floor(x / (cw + GAP.x))));
     const local = x - col * (cw + GAP.x) - PAD.left;
     return Math.round((local / pw) * (data.len - 1));
   };
@@ -183,7 +189,8 @@ function drawLegend(g, cell) {
   g.font = "12px system-ui, sans-serif";
   g.textBaseline = "middle";
   g.textAlign = "left";
-  const x0 = cell.x + PAD.left;
+  // Aligned with the plots' axes, unless the cell is narrow (a phone) and the labels need room.
+  const x0 = cell.x + (cell.w < 220 ? 4 : PAD.left);
   const y0 = cell.y + PAD.top + 6;
   const dy = Math.min(22, (cell.h - PAD.top) / items.length);
   items.forEach(([label, mark], i) => {

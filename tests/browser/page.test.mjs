@@ -36,8 +36,8 @@ after(async () => {
 });
 
 /** A fresh page (own context, empty cache) that records console errors and uncaught exceptions. */
-async function open(url, { init } = {}) {
-  const context = await browser.newContext({ viewport: { width: 1280, height: 940 } });
+async function open(url, { init, viewport = { width: 1280, height: 940 } } = {}) {
+  const context = await browser.newContext({ viewport });
   const page = await context.newPage();
   page.setDefaultTimeout(TIMEOUT);
   page.problems = [];
@@ -290,6 +290,41 @@ describe("demo page", () => {
     assert.equal(await state(page), "ready");
     assert.deepEqual(page.problems, []);
     await close(page);
+  });
+
+  test("reads at phone width: the joint panels go 2 × 4 and nothing overflows", async () => {
+    // The plot's panel grid as drawn (plot.js: gaps of 14 × 12 px, 7 joints + the legend).
+    const layout = (page) =>
+      page.evaluate(() => {
+        const plot = document.getElementById("joints-plot");
+        const cols = Number(plot.dataset.columns);
+        const rows = Math.ceil(8 / cols);
+        return {
+          cols,
+          width: (plot.clientWidth - 14 * (cols - 1)) / cols,
+          height: (plot.clientHeight - 12 * (rows - 1)) / rows,
+          overflow: document.documentElement.scrollWidth - window.innerWidth,
+        };
+      });
+    const phone = await open(`${server.url}www/`, { viewport: { width: 390, height: 844 } });
+    await waitState(phone, "ready");
+    const small = await layout(phone);
+    await shot(phone, "phone");
+    const wide = await phone.evaluate(() =>
+      [...document.querySelectorAll("body *")]
+        .filter((el) => el.getBoundingClientRect().right > window.innerWidth + 0.5)
+        .map((el) => `${el.tagName.toLowerCase()}${el.id ? "#" + el.id : ""}.${el.className}`)
+        .slice(0, 8),
+    );
+    assert.equal(small.cols, 2, "two columns of panels on a phone");
+    assert.ok(small.width >= 150 && small.height >= 100, `each panel ${small.width} × ${small.height} px`);
+    assert.ok(small.overflow <= 0, `the page is ${small.overflow} px wider than the screen: ${wide.join(", ")}`);
+    assert.deepEqual(phone.problems, []);
+    await close(phone);
+    const desk = await open(`${server.url}www/`);
+    await waitState(desk, "ready");
+    assert.equal((await layout(desk)).cols, 4, "four columns on a desktop");
+    await close(desk);
   });
 
   test("keyboard: space plays and pauses, arrows scrub", async () => {
