@@ -2,8 +2,9 @@
 // The demo page in headless Chromium (the browser tests' setup): time from navigation to
 // `ready` on localhost, the wasm size (raw and gzip), one predicted frame and a 100-step
 // sequence for the attentive model (the page's default), DMBN and DMBN-PTE through the page's
-// worker, and the page's own progressive prediction of a whole episode. Saves a screenshot of
-// the page mid-prediction to docs/page.png.
+// worker, the page's own progressive prediction of a whole episode, and live mode's latency
+// (new observation → first frames / whole forecast of the rest, longest main-thread task). Saves
+// screenshots of the page mid-prediction to docs/page.png and in live mode to docs/live.png.
 //
 // Usage: node bench/page.mjs [--runs N] [--no-screenshot]
 //   Needs the web package: wasm-pack build --release --target web --out-dir pkg --no-typescript
@@ -150,6 +151,59 @@ try {
   await context.close();
   result.chromium = browser.version();
 
+  // Live mode, the default model, 2 workers, every step observed: from a new observation to the
+  // first frames of the new forecast and to the whole forecast of a 60-step remainder; and the
+  // longest main-thread task while the episode plays live (every 10th step observed, the
+  // page's default).
+  {
+    const context = await browser.newContext({ viewport: { width: 1280, height: 940 } });
+    const page = await context.newPage();
+    // (A push: long enough for a 60-step remainder.)
+    await page.goto(`${server.url}www/?mode=live&action=move&seed=7&every=1&workers=2`);
+    await page.waitForFunction(() => ["predicted", "error"].includes(document.body.dataset.state), null, { timeout: TIMEOUT });
+    await waitState(page, "predicted");
+    if ((await page.getAttribute("#play", "aria-pressed")) === "true") await page.click("#play");
+    await new Promise((r) => setTimeout(r, 1000)); // the second worker loads the weights
+    const len = Number(await page.getAttribute("#scrubber", "max")) + 1;
+    if (len < 62) throw new Error(`move seed 7 has ${len} steps: too short for a 60-step remainder`);
+    const forecastAt = async (step) => {
+      await page.locator("#scrubber").fill(String(step));
+      await page.waitForFunction(
+        (from) => window.dmbnTimings.live.at(-1)?.from === from && document.body.dataset.state === "predicted",
+        step + 1,
+        { timeout: TIMEOUT },
+      );
+      return page.evaluate(() => window.dmbnTimings.live.at(-1));
+    };
+    const remainder = [];
+    for (let i = 0; i < runs * 2; i++) {
+      await forecastAt(len - 62);
+      remainder.push(await forecastAt(len - 61));
+    }
+    await page.locator("#live-every").fill("10");
+    await page.locator("#live-every").dispatchEvent("change");
+    await page.keyboard.press("Home");
+    await page.evaluate(() => {
+      window.longTasks = [];
+      new PerformanceObserver((list) => window.longTasks.push(...list.getEntries().map((e) => e.duration))).observe({ type: "longtask" });
+    });
+    const played = await page.evaluate(() => window.dmbnTimings.live.length);
+    await page.click("#play");
+    await page.waitForFunction(() => document.getElementById("play").getAttribute("aria-pressed") === "false", null, { timeout: TIMEOUT });
+    await page.waitForFunction(() => document.body.dataset.state === "predicted", null, { timeout: TIMEOUT });
+    const playing = (await page.evaluate(() => window.dmbnTimings.live)).slice(played);
+    result.live = {
+      remainder_steps: remainder[0].steps,
+      first_frames_ms: round(median(remainder.map((r) => r.first_chunk_ms))),
+      remainder_ms: round(median(remainder.map((r) => r.total_ms))),
+      played_steps: len,
+      played_forecasts: playing.length,
+      played_first_frames_ms: round(median(playing.map((r) => r.first_chunk_ms))),
+      longest_task_ms: round(Math.max(0, ...(await page.evaluate(() => window.longTasks)))),
+    };
+    await context.close();
+  }
+
   // A screenshot mid-prediction (chunks slowed down so the moment is easy to catch).
   if (screenshot) {
     const context = await browser.newContext({ viewport: { width: 1280, height: 900 } });
@@ -163,6 +217,19 @@ try {
     await page.locator("#scrubber").fill(String(Math.floor(len * 0.3)));
     await page.screenshot({ path: join(ROOT, "docs", "page.png"), fullPage: true });
     await context.close();
+    // Live mode, every model's error curve, 40% into a grasp.
+    const live = await browser.newContext({ viewport: { width: 1280, height: 1100 } });
+    const lp = await live.newPage();
+    await lp.goto(`${server.url}www/?mode=live&action=grasp&seed=11&every=5`);
+    await lp.waitForFunction(() => document.body.dataset.state === "predicted", null, { timeout: TIMEOUT });
+    if ((await lp.getAttribute("#play", "aria-pressed")) === "true") await lp.click("#play");
+    await lp.click("#compare");
+    await lp.waitForFunction(() => Number(document.body.dataset.compared ?? 0) > 0, null, { timeout: 4 * TIMEOUT });
+    const n = Number(await lp.getAttribute("#scrubber", "max")) + 1;
+    await lp.locator("#scrubber").fill(String(Math.floor(n * 0.4)));
+    await lp.waitForFunction(() => document.body.dataset.state === "predicted", null, { timeout: TIMEOUT });
+    await lp.screenshot({ path: join(ROOT, "docs", "live.png"), fullPage: true });
+    await live.close();
   }
   result.load_average = [round(load, 2), round(loadavg()[0], 2)];
 } finally {
@@ -197,4 +264,9 @@ for (const [kind] of MODELS) {
   console.log(`| ${name}: 100-step sequence, first chunk (10 steps) back | ${ms(r.sequence100_first_chunk_ms)} | |`);
   console.log(`| ${name}: page, Predict → all ${r.page_sequence_steps} steps drawn | ${ms(r.page_sequence_ms)} | |`);
 }
+const live = result.live;
+console.log(`| live mode: new observation → first frames of the new forecast (${NAMES[DEFAULT]}, 2 workers) | ${ms(live.first_frames_ms)} | ≤ 50 ms |`);
+console.log(`| live mode: new observation → whole forecast of a ${live.remainder_steps}-step remainder | ${ms(live.remainder_ms)} | ≤ 100 ms |`);
+console.log(`| live mode: playing a ${live.played_steps}-step episode, every 10th step observed: forecasts finished, first frames | ${live.played_forecasts}, ${ms(live.played_first_frames_ms)} | |`);
+console.log(`| live mode: longest main-thread task while playing | ${ms(live.longest_task_ms)} | ≤ 50 ms |`);
 console.log(`\njson: ${JSON.stringify(result)}`);

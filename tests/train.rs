@@ -381,3 +381,53 @@ fn bad_settings_are_refused() {
         .unwrap();
     assert!(err.to_string().contains("no checkpoint"), "{err}");
 }
+
+#[test]
+fn init_starts_from_a_model_files_weights_and_normalisation() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (data, other) = (tmp.path().join("data"), tmp.path().join("other"));
+    dataset(&data, 2);
+    // Other episodes: another joint normalisation than the file's.
+    support::simulated_dataset(&other, 0..2, &Action::ALL, 900);
+    let first = tmp.path().join("first");
+    new_trainer(&data, &first, small(ModelKind::Pte, 2))
+        .unwrap()
+        .run(false, |_| {})
+        .unwrap();
+    let run = |init: Option<&Path>, name: &str| {
+        let mut config = small(ModelKind::Pte, 1);
+        // (A step this small leaves the weights as they start.)
+        config.lr = 1e-12;
+        config.init = init.map(Path::to_path_buf);
+        let out = tmp.path().join(name);
+        new_trainer(&other, &out, config)
+            .unwrap()
+            .run(false, |_| {})
+            .unwrap();
+        final_prediction(&out)
+    };
+    let before = final_prediction(&first);
+    let largest = |a: &[f32], b: &[f32]| {
+        a.iter()
+            .zip(b)
+            .map(|(x, y)| (x - y).abs())
+            .fold(0.0f32, f32::max)
+    };
+    let continued = run(Some(&first.join("model.dmbn")), "continued");
+    assert!(largest(&before.image_mean, &continued.image_mean) < 1e-4);
+    assert!(largest(&before.joint_mean, &continued.joint_mean) < 1e-4);
+    let fresh = run(None, "fresh");
+    assert!(largest(&before.joint_mean, &fresh.joint_mean) > 1e-3);
+    // A file of another kind is refused, naming the setting.
+    let mut wrong = small(ModelKind::Dmbn, 1);
+    wrong.init = Some(first.join("model.dmbn"));
+    match new_trainer(&other, &tmp.path().join("wrong"), wrong) {
+        Err(TrainError::Config {
+            field: "init",
+            message,
+        }) => {
+            assert!(message.contains("model.dmbn"), "{message}")
+        }
+        other => panic!("expected an init error, got {:?}", other.err()),
+    }
+}

@@ -360,3 +360,22 @@ fn scores_match_native_within_1e_4() {
     let err = model.score(&ep, "all", 5, 0.5).map(|_| ()).unwrap_err();
     assert!(message(err).contains("interp or extrap"));
 }
+
+#[wasm_bindgen_test]
+fn forecast_error_scores_drawn_frames_and_names_bad_layouts() {
+    let ep = grasp7();
+    let (frames, joints) = (ep.frames(), ep.joints());
+    let quality = |value: JsValue| -> dmbn::quality::Quality {
+        serde_wasm_bindgen::from_value(value).expect("the fields of dmbn score --json")
+    };
+    let exact = quality(dmbn::web::forecast_error(&frames, &joints, &frames, &joints).unwrap());
+    assert_eq!(exact.steps, ep.steps());
+    assert_eq!((exact.joint_rmse, exact.image_mse), (0.0, 0.0));
+    // Every frame one step late: the error of holding each frame a step too long.
+    let px = 64 * 64 * 3;
+    let late: Vec<u8> = [&frames[..px], &frames[..frames.len() - px]].concat();
+    let lagged = quality(dmbn::web::forecast_error(&frames, &joints, &late, &joints).unwrap());
+    assert!(lagged.image_mse > 0.0 && lagged.joint_rmse == 0.0);
+    let err = dmbn::web::forecast_error(&frames, &joints, &frames[1..], &joints).unwrap_err();
+    assert!(message(err).contains("frames:"));
+}

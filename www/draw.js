@@ -1,6 +1,7 @@
 // Drawing the current step: true and predicted frames, σ map, timeline, joint plot, table map.
 
-import { observedSteps } from "./observations.js";
+import { follow, redrawErrors } from "./live.js";
+import { clampInt, observedSteps } from "./observations.js";
 import { drawJoints } from "./plot.js";
 import { state } from "./state.js";
 import { ui } from "./ui.js";
@@ -11,6 +12,7 @@ export function show(k) {
   if (!state.shown) return;
   state.step = Math.max(0, Math.min(state.shown.len - 1, k));
   ui.scrubber.value = String(state.step);
+  follow(state.step);
   render();
 }
 
@@ -20,12 +22,18 @@ export function render() {
     drawJoints(ui.plot, null);
     return;
   }
-  ui.frameTrue.getContext("2d").putImageData(shown.images[step], 0, 0);
-  const has = p && p.done[step];
+  const live = shown.mode === "live";
+  // Live mode shows the forecast some steps ahead of the current (seen) step.
+  const at = live ? Math.min(shown.len - 1, step + clampInt(ui.ahead.value, 1, 100)) : step;
+  const has = p && p.done[at];
+  const trueFrame = ui.frameTrue.getContext("2d");
+  trueFrame.putImageData(shown.images[step], 0, 0);
   if (has) {
     const px = p.size * p.size;
-    ui.framePred.getContext("2d").putImageData(rgbImage(p.mean, p.size, step * px * 3), 0, 0);
-    const heat = state.wasm.heatMap(p.sigma.subarray(step * px, (step + 1) * px), p.maxSigma);
+    const mean = rgbImage(p.mean, p.size, at * px * 3);
+    ui.framePred.getContext("2d").putImageData(mean, 0, 0);
+    if (live && ui.ghost.checked) drawGhost(trueFrame, mean);
+    const heat = state.wasm.heatMap(p.sigma.subarray(at * px, (at + 1) * px), p.maxSigma);
     ui.sigmaMap.getContext("2d").putImageData(rgbImage(heat, p.size), 0, 0);
     ui.sigmaScale.textContent = p.maxSigma.toFixed(3);
   } else {
@@ -34,7 +42,12 @@ export function render() {
   }
   const stack = ui.framePred.parentElement;
   stack.classList.toggle("empty", !has);
-  stack.dataset.empty = p ? "this step is not predicted yet" : "no prediction yet: choose observations, then Predict";
+  stack.dataset.empty = live
+    ? "forecasting…"
+    : p
+      ? "this step is not predicted yet"
+      : "no prediction yet: choose observations, then Predict";
+  if (live) ui.predLabel.textContent = has ? `forecast of step ${at}` : "";
   ui.counter.textContent = `step ${step} / ${shown.len - 1} · t = ${shown.times[step].toFixed(3)}`;
   ui.trueLabel.textContent = shown.mode === "t" ? "" : `mode ${shown.mode}`;
   state.timelineAt = drawTimeline(ui.timeline, {
@@ -45,6 +58,7 @@ export function render() {
     done: p?.done,
     step,
   });
+  if (live) redrawErrors();
   state.stepAt = drawJoints(ui.plot, {
     len: shown.len,
     joints: shown.joints,
@@ -52,6 +66,18 @@ export function render() {
     step,
     prediction: p,
   });
+}
+
+/** The forecast frame as a ghost over the true one: where the arm is going. */
+const ghost = document.createElement("canvas");
+function drawGhost(g, mean) {
+  ghost.width = mean.width;
+  ghost.height = mean.height;
+  ghost.getContext("2d").putImageData(mean, 0, 0);
+  g.save();
+  g.globalAlpha = 0.45;
+  g.drawImage(ghost, 0, 0);
+  g.restore();
 }
 
 export function drawTableMap() {

@@ -74,11 +74,14 @@ export function buildShown() {
   const { episode } = state;
   const mode = ui.mode.value;
   ui.freeze.hidden = mode !== "f";
+  ui.live.hidden = ui.errorPanel.hidden = mode !== "live";
+  // Live mode observes the episode as it is (t), step by step.
+  const sequence = mode === "live" ? "t" : mode;
   let ev;
   try {
     const from = clampInt(ui.freezeFrom.value, 0, episode.len - 1);
     const to = clampInt(ui.freezeTo.value, from + 1, episode.len);
-    ev = mode === "f" ? episode.handle.evalSequence(mode, episode.seed, from, to) : episode.handle.evalSequence(mode, episode.seed);
+    ev = mode === "f" ? episode.handle.evalSequence(mode, episode.seed, from, to) : episode.handle.evalSequence(sequence, episode.seed);
   } catch (err) {
     showError(err);
     return false;

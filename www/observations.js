@@ -41,6 +41,14 @@ export function observedSteps() {
 
 export function updateObsInfo() {
   const steps = observedSteps();
+  const live = state.shown?.mode === "live";
+  for (const el of [ui.k, ui.firstK, ui.randomK, ui.clearObs]) el.disabled = state.fatal || live;
+  ui.predict.textContent = live ? "Forecast" : "Predict";
+  if (live) {
+    ui.obsInfo.textContent = `live: the ${steps.length} step${steps.length > 1 ? "s" : ""} seen so far, every ${ui.liveEvery.value || 1}: ${steps.length > 12 ? `…, ${steps.slice(-12).join(", ")}` : steps.join(", ")}`;
+    ui.predict.disabled = state.fatal;
+    return;
+  }
   ui.obsInfo.textContent = steps.length
     ? `${steps.length} observed: ${steps.length > 12 ? `${steps.slice(0, 12).join(", ")}, …` : steps.join(", ")}`
     : "nothing observed: click frames on the timeline";

@@ -1,7 +1,7 @@
 // The 7 joint curves as small multiples on one canvas: the true (shown) values, the predicted
 // mean with its ±2σ band as far as the prediction has come, the observed points and a cursor.
 
-import { fit } from "./views.js";
+import { fit, MUTED, panelFrame } from "./views.js";
 
 export const JOINTS = 7;
 export const JOINT_NAMES = ["base", "shoulder", "elbow", "wrist 1", "wrist 2", "wrist 3", "gripper"];
@@ -15,8 +15,6 @@ const NARROW_COLS = 2;
 const NARROW = 560;
 const GAP = { x: 14, y: 12 };
 const PAD = { left: 40, right: 6, top: 18, bottom: 16 };
-const MUTED = "#8b93a3";
-const GRID = "#262b36";
 const TRUE = "#e6e9ef";
 
 /**
@@ -88,18 +86,7 @@ function drawJoint(g, cell, j, { len, joints, observed, step, prediction }) {
 
   // Frame, title, ticks.
   g.save();
-  g.font = "11px system-ui, sans-serif";
-  g.fillStyle = JOINT_COLORS[j];
-  g.textBaseline = "alphabetic";
-  g.textAlign = "left";
-  g.fillText(`${JOINT_NAMES[j]} (${JOINT_UNITS[j]})`, left, cell.y + 12);
-  g.strokeStyle = GRID;
-  g.lineWidth = 1;
-  g.strokeRect(Math.round(left) + 0.5, Math.round(top) + 0.5, Math.round(right - left), Math.round(bottom - top));
-  g.fillStyle = MUTED;
-  g.font = "10px system-ui, sans-serif";
-  g.textAlign = "right";
-  g.textBaseline = "middle";
+  panelFrame(g, { left, right, top, bottom }, `${JOINT_NAMES[j]} (${JOINT_UNITS[j]})`, cell.y + 12, JOINT_COLORS[j]);
   for (const v of ticks(lo, hi, 3)) {
     const yy = Math.round(y(v)) + 0.5;
     g.beginPath();

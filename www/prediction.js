@@ -2,6 +2,7 @@
 
 import { BLENDS, CHUNK, CHUNK_DELAY, MODEL_NAMES, MODELS } from "./config.js";
 import { render } from "./draw.js";
+import { forecastDone, forecastNow } from "./live.js";
 import { loadModel, selectModel } from "./models.js";
 import { observedSteps } from "./observations.js";
 import { JOINTS } from "./plot.js";
@@ -17,6 +18,10 @@ export function cancelPrediction() {
 
 /** Settings changed: predict again when live, otherwise drop the outdated prediction. */
 export function invalidate() {
+  if (state.shown?.mode === "live") {
+    forecastNow();
+    return;
+  }
   if (state.live && state.episode && state.observed.size) {
     predict();
   } else {
@@ -27,7 +32,7 @@ export function invalidate() {
 }
 
 /** The shown sequence's frames, joints and time stamps at `steps`, as the model takes them. */
-function observations(steps) {
+export function observations(steps) {
   const { shown } = state;
   const px = shown.size * shown.size * 3;
   const frames = new Uint8Array(steps.length * px);
@@ -41,8 +46,12 @@ function observations(steps) {
   return { frames, joints, times };
 }
 
-/** Predicts every step of the shown sequence from the observed ones, drawing each chunk as it comes. */
-export async function predict() {
+/**
+ * Predicts the steps of the shown sequence from `from` on (every step by default; live mode's
+ * forecast: the unseen rest) from the observed ones, drawing each chunk of `chunk` steps as it
+ * comes.
+ */
+export async function predict({ from = 0, chunk = CHUNK } = {}) {
   const { shown } = state;
   if (state.fatal || !state.episode || !shown) return;
   const steps = observedSteps();
@@ -58,13 +67,15 @@ export async function predict() {
   const px = size * size;
   const { frames, joints, times } = observations(steps);
   // Targets: the time stamps of the shown sequence, step by step (permuted for p).
-  const targets = Float32Array.from(shown.times);
-  const len = targets.length;
+  const targets = Float32Array.from(shown.times.subarray(from));
+  const len = shown.len;
   const p = {
     model,
     mode: shown.mode,
     observe,
     len,
+    from,
+    chunk,
     size,
     observed: steps.length,
     done: new Uint8Array(len),
@@ -75,6 +86,8 @@ export async function predict() {
     jointSigma: new Float32Array(len * JOINTS),
     maxSigma: 0,
     complete: false,
+    /** When it was asked for (live mode: when the observation came in). */
+    asked: performance.now(),
     chunks: [],
   };
   state.prediction = p;
@@ -89,8 +102,8 @@ export async function predict() {
   document.body.dataset.progress = "0";
   p.start = performance.now();
   const run = state.inference.predict(
-    { model, frames, joints, times, targets, blend: BLENDS[observe], chunk: CHUNK, delay: CHUNK_DELAY },
-    (chunk) => receiveChunk(p, chunk),
+    { model, frames, joints, times, targets, blend: BLENDS[observe], chunk, delay: CHUNK_DELAY },
+    (c) => receiveChunk(p, { ...c, start: from + c.start }),
   );
   p.cancel = run.cancel;
   let reply;
@@ -119,18 +132,24 @@ function receiveChunk(p, c) {
   p.done.fill(1, c.start, c.start + c.count);
   p.count += c.count;
   p.chunks.push(c.ms);
-  if (p.firstMs === undefined) p.firstMs = performance.now() - p.start;
+  if (p.firstMs === undefined) {
+    p.firstAt = performance.now();
+    p.firstMs = p.firstAt - p.start;
+  }
+  const steps = p.len - p.from;
   document.body.dataset.progress = String(p.count);
-  ui.predLabel.textContent = `predicting… ${p.count} / ${p.len}`;
-  ui.timing.textContent = `${p.count} / ${p.len} steps · ${Math.round(performance.now() - p.start)} ms`;
+  ui.predLabel.textContent = `predicting… ${p.count} / ${steps}`;
+  ui.timing.textContent = `${p.count} / ${steps} steps · ${Math.round(performance.now() - p.start)} ms`;
   render();
 }
 
 /** A prediction is complete: its timings, for the page and for automation. */
 function finish(p, reply) {
-  const { model, mode, observe, len } = p;
+  const { model, mode, observe, from } = p;
+  const len = p.len - from;
   p.complete = true;
   p.totalMs = performance.now() - p.start;
+  if (mode === "live") forecastDone(p);
   // A counter that automation can wait on: it changes with every finished prediction.
   document.body.dataset.predictions = String(Number(document.body.dataset.predictions ?? 0) + 1);
   state.timings.prediction = {
@@ -139,17 +158,18 @@ function finish(p, reply) {
     observe,
     observed: p.observed,
     steps: len,
+    from,
     total_ms: p.totalMs,
     per_frame_ms: p.totalMs / len,
     first_chunk_ms: p.firstMs,
     encode_ms: reply.encodeMs,
-    chunk: CHUNK,
+    chunk: p.chunk,
     workers: reply.workers,
   };
   ui.predLabel.textContent = "";
   ui.timing.textContent =
     `${len} steps in ${Math.round(p.totalMs)} ms (${(p.totalMs / len).toFixed(1)} ms per frame) · ` +
-    `first ${Math.min(CHUNK, len)} after ${Math.round(p.firstMs)} ms · ${reply.workers} worker${reply.workers > 1 ? "s" : ""}`;
+    `first ${Math.min(p.chunk, len)} after ${Math.round(p.firstMs)} ms · ${reply.workers} worker${reply.workers > 1 ? "s" : ""}`;
   ui.timing.title = `${MODEL_NAMES[model]}, mode ${mode}, ${observe}, ${p.observed} observed steps; encoding ${Math.round(reply.encodeMs)} ms`;
   render();
   settle();

@@ -17,6 +17,12 @@ export const state = {
   pendingObserved: null,
   /** The prediction on screen (or filling in). */
   prediction: null,
+  /** Live mode: the seen observations the forecast on screen was made from ("0,5,10"). */
+  seenKey: "",
+  /** Live mode: the error curves of the episode on screen, {key, byModel: Map(model → points)}. */
+  curves: { key: "", byModel: new Map() },
+  /** Live mode: the running model comparison, {stop}, or null. */
+  comparing: null,
   /** Once a prediction has been asked for, any change of settings predicts again. */
   live: false,
   /** Model ids whose weights the workers hold. */
@@ -33,5 +39,5 @@ export const state = {
   timelineAt: () => -1,
   tableAt: () => null,
   /** Numbers for automation and the page benchmark (bench/page.mjs). */
-  timings: (window.dmbnTimings = { models: {}, prediction: null }),
+  timings: (window.dmbnTimings = { models: {}, prediction: null, live: [] }),
 };

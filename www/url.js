@@ -21,6 +21,9 @@ export function readUrl() {
   set(ui.k, "k");
   set(ui.freezeFrom, "from");
   set(ui.freezeTo, "to");
+  set(ui.liveEvery, "every");
+  set(ui.ahead, "ahead");
+  if (params.has("ghost")) ui.ghost.checked = params.get("ghost") !== "0";
   if (params.has("obs")) {
     state.pendingObserved = params
       .get("obs")
@@ -50,7 +53,11 @@ export function writeUrl() {
   put("mode", ui.mode.value);
   put("from", ui.mode.value === "f" ? ui.freezeFrom.value : null);
   put("to", ui.mode.value === "f" ? ui.freezeTo.value : null);
+  const live = ui.mode.value === "live";
+  put("every", live ? ui.liveEvery.value : null);
+  put("ahead", live ? ui.ahead.value : null);
+  put("ghost", live && !ui.ghost.checked ? "0" : null);
   put("observe", ui.observe.value);
-  put("obs", observedSteps().join(","));
+  put("obs", live ? null : observedSteps().join(","));
   history.replaceState(null, "", `${location.pathname}?${q}`);
 }

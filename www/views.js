@@ -173,3 +173,26 @@ export function drawTimeline(canvas, { len, size, sprite, observed, done, step }
     return k >= 0 && k < len ? k : -1;
   };
 }
+
+/** The colours of the small plots (joint panels, live error plot): tick labels, grid and frame. */
+export const MUTED = "#8b93a3";
+export const GRID = "#262b36";
+
+/**
+ * A small plot's frame: `title` in `color` above the box `{left, right, top, bottom}` (its
+ * baseline at `titleY`), the box, and the tick labels' style (muted, right-aligned) left set.
+ */
+export function panelFrame(g, { left, right, top, bottom }, title, titleY, color) {
+  g.font = "11px system-ui, sans-serif";
+  g.fillStyle = color;
+  g.textBaseline = "alphabetic";
+  g.textAlign = "left";
+  g.fillText(title, left, titleY);
+  g.strokeStyle = GRID;
+  g.lineWidth = 1;
+  g.strokeRect(Math.round(left) + 0.5, Math.round(top) + 0.5, Math.round(right - left), Math.round(bottom - top));
+  g.fillStyle = MUTED;
+  g.font = "10px system-ui, sans-serif";
+  g.textAlign = "right";
+  g.textBaseline = "middle";
+}

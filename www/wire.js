@@ -4,7 +4,8 @@ import { drawTableMap, render, show, sigmaOverlay } from "./draw.js";
 import { buildShown, generate } from "./episodes.js";
 import { selectModel } from "./models.js";
 import { chooseFirst, chooseRandom, updateObsInfo } from "./observations.js";
-import { pause, toggle } from "./playback.js";
+import { pause, play, toggle } from "./playback.js";
+import { compareModels, forecastNow, redrawErrors } from "./live.js";
 import { cancelPrediction, invalidate, predict } from "./prediction.js";
 import { state } from "./state.js";
 import { clearError, settle } from "./status.js";
@@ -20,6 +21,12 @@ export function observationsChanged() {
 
 function toggleObserved(k) {
   if (k < 0 || !state.shown) return;
+  // Live mode: the rule chooses the observations; the timeline seeks.
+  if (state.shown.mode === "live") {
+    pause();
+    show(k);
+    return;
+  }
   if (state.observed.has(k)) state.observed.delete(k);
   else state.observed.add(k);
   observationsChanged();
@@ -91,10 +98,16 @@ export function wire() {
   });
   const modeChanged = () => {
     if (!state.episode) return;
+    const wasLive = state.shown?.mode === "live";
     if (buildShown()) {
       clearError();
-      show(state.step);
+      updateObsInfo();
       writeUrl();
+      // Entering live mode plays the episode from its start, forecasting as it goes.
+      if (state.shown.mode === "live" && !wasLive) {
+        show(0);
+        play();
+      } else show(state.step);
       invalidate();
     }
   };
@@ -105,7 +118,15 @@ export function wire() {
     writeUrl();
     invalidate();
   });
-  ui.predict.addEventListener("click", () => predict());
+  ui.predict.addEventListener("click", () => (state.shown?.mode === "live" ? forecastNow() : predict()));
+  ui.liveEvery.addEventListener("change", () => {
+    writeUrl();
+    forecastNow();
+    redrawErrors();
+  });
+  ui.ahead.addEventListener("change", () => (writeUrl(), render()));
+  ui.ghost.addEventListener("change", () => (writeUrl(), render()));
+  ui.compare.addEventListener("click", () => compareModels());
   ui.sigmaToggle.addEventListener("change", sigmaOverlay);
   ui.sigmaOpacity.addEventListener("input", sigmaOverlay);
   ui.play.addEventListener("click", toggle);
@@ -116,7 +137,8 @@ export function wire() {
   ui.timeline.addEventListener("click", (e) => toggleObserved(state.timelineAt(e.clientX)));
   ui.timeline.addEventListener("mousemove", (e) => {
     const k = state.timelineAt(e.clientX);
-    ui.timeline.title = k < 0 ? "" : `step ${k}: click to ${state.observed.has(k) ? "stop observing it" : "observe it"}`;
+    const verb = state.shown?.mode === "live" ? "go there" : state.observed.has(k) ? "stop observing it" : "observe it";
+    ui.timeline.title = k < 0 ? "" : `step ${k}: click to ${verb}`;
   });
   const scrubPlot = (e) => {
     if (!state.shown || !(e.buttons & 1)) return;
@@ -136,5 +158,6 @@ export function wire() {
   };
   new ResizeObserver(redraw).observe(ui.plot);
   new ResizeObserver(redraw).observe(ui.timeline);
+  new ResizeObserver(redraw).observe(ui.errorPlot);
   sigmaOverlay();
 }

@@ -4,12 +4,14 @@
 //! observation), and optionally each action's mean motion. One implementation natively
 //! (`dmbn score`) and in wasm (`Model.score`).
 mod accumulator;
+mod forecast;
 mod mean_motion;
 mod object_mask;
 mod report;
 mod scenario;
 
 pub use accumulator::{Accumulator, Quality};
+pub use forecast::score_steps;
 pub use mean_motion::MeanMotion;
 pub use object_mask::{is_object, OBJECT_COLOUR};
 pub use report::{score_sequence, QualityReport, QualityRow, SequenceScores};

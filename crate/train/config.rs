@@ -1,3 +1,5 @@
+use std::path::PathBuf;
+
 use serde::{Deserialize, Deserializer, Serialize};
 
 use crate::augment::TimeWarpConfig;
@@ -97,6 +99,11 @@ pub struct TrainConfig {
     /// Time-warp augmentation of training sequences (the paper's, for DMBN-PTE), or none.
     #[serde(default)]
     pub augment: Option<TimeWarpConfig>,
+    /// A model file whose weights and joint normalisation the run starts from (fine-tuning,
+    /// or training a shipped model longer), instead of fresh weights; its model config must
+    /// be `model`'s kind and frame size.
+    #[serde(default)]
+    pub init: Option<PathBuf>,
 }
 
 impl TrainConfig {
@@ -125,6 +132,7 @@ impl TrainConfig {
             checkpoint_every: 500,
             quality_sequences: 10,
             augment: None,
+            init: None,
         }
     }
 }

@@ -65,11 +65,27 @@ impl Trainer {
         }
         std::fs::create_dir_all(out).map_err(TrainError::io(out))?;
         let split = Split::load(data, config.model.image_size, config.val_fraction)?;
-        let normalization = Normalization::fit(split.train.iter().flat_map(|s| s.joints.iter()));
         let device = training_device();
         device.seed(config.seed);
-        let model = config.model.init(&device)?;
-        model.draw_weights();
+        let (model, normalization) = match &config.init {
+            Some(path) => {
+                let bytes = std::fs::read(path).map_err(TrainError::io(path))?;
+                let (model, normalization, _) = model::load_bytes_expecting(
+                    &bytes,
+                    &device,
+                    Some(config.model.kind),
+                    Some(config.model.image_size),
+                )
+                .map_err(|e| TrainError::config("init", format!("{}: {e}", path.display())))?;
+                (model, normalization)
+            }
+            None => {
+                let model = config.model.init(&device)?;
+                model.draw_weights();
+                let joints = split.train.iter().flat_map(|s| s.joints.iter());
+                (model, Normalization::fit(joints))
+            }
+        };
         let log = MetricsLog::open(&out.join("metrics.jsonl"), Some(0))?;
         let optim = optimizer(&config);
         let state = CheckpointState {

@@ -22,6 +22,10 @@ pub struct ValQuality {
     /// `extrap`: joint RMSE and image MSE over holding the last observation's.
     pub extrap_joint: f32,
     pub extrap_image: f32,
+    /// `interp`: the object's overlap (IoU) in the predicted frames, not a ratio: whether the
+    /// model draws the small object yet (`None` when it is never visible).
+    #[serde(default)]
+    pub interp_object_iou: Option<f32>,
 }
 
 impl ValQuality {
@@ -31,6 +35,7 @@ impl ValQuality {
         sequences: &[&Sequence],
     ) -> Result<Option<ValQuality>, ModelError> {
         let mut ratios = [[0.0f32; 2]; 2];
+        let mut interp_object_iou = None;
         for (row, scenario) in Scenario::ALL.into_iter().enumerate() {
             let (mut model, mut baseline) = (Accumulator::default(), Accumulator::default());
             for seq in sequences {
@@ -52,6 +57,9 @@ impl ValQuality {
             if model.steps == 0 {
                 return Ok(None);
             }
+            if scenario == Scenario::Interp {
+                interp_object_iou = model.object_iou.map(|v| v as f32);
+            }
             ratios[row] = [
                 (model.joint_rmse / baseline.joint_rmse) as f32,
                 (model.image_mse / baseline.image_mse) as f32,
@@ -62,6 +70,7 @@ impl ValQuality {
             interp_image: ratios[0][1],
             extrap_joint: ratios[1][0],
             extrap_image: ratios[1][1],
+            interp_object_iou,
         }))
     }
 

@@ -2,205 +2,26 @@
 // Needs the web package: `wasm-pack build --release --target web --out-dir pkg`, then
 // `node --test tests/browser/` (`.ci/run` does both). Screenshots go to artifacts/browser/.
 import assert from "node:assert/strict";
-import { existsSync, mkdirSync } from "node:fs";
-import { dirname, join } from "node:path";
-import { after, before, describe, test } from "node:test";
-import { fileURLToPath } from "node:url";
+import { describe, test } from "node:test";
 
-import { launch } from "./browser.mjs";
 import { serve } from "./server.mjs";
-
-const ROOT = join(dirname(fileURLToPath(import.meta.url)), "..", "..");
-const ARTIFACTS = join(ROOT, "artifacts", "browser");
-/** Generous: the machine may be busy, and a cold start compiles a few MB of wasm. */
-const TIMEOUT = 60_000;
-
-let browser;
-let server;
-
-before(async () => {
-  assert.ok(
-    existsSync(join(ROOT, "pkg", "dmbn.js")),
-    "no web package in pkg/: build it with `wasm-pack build --release --target web --out-dir pkg --no-typescript`",
-  );
-  mkdirSync(ARTIFACTS, { recursive: true });
-  browser = await launch();
-  // 200 random-looking bytes: not a model file.
-  const corrupt = Buffer.from(Array.from({ length: 200 }, (_, i) => (i * 73 + 41) % 256));
-  server = await serve(ROOT, { files: { "/test/corrupt.dmbn": corrupt } });
-});
-
-after(async () => {
-  await browser?.close();
-  await server?.close();
-});
-
-/** A fresh page (own context, empty cache) that records console errors and uncaught exceptions. */
-async function open(url, { init, viewport = { width: 1280, height: 940 } } = {}) {
-  const context = await browser.newContext({ viewport });
-  const page = await context.newPage();
-  page.setDefaultTimeout(TIMEOUT);
-  page.problems = [];
-  page.on("pageerror", (err) => page.problems.push(`pageerror: ${err.message}`));
-  page.on("console", (msg) => {
-    if (msg.type() === "error") page.problems.push(`console: ${msg.text()}`);
-  });
-  if (init) await page.addInitScript(init);
-  await page.goto(url);
-  return page;
-}
-
-const close = (page) => page.context().close();
-const shot = (page, name) => page.screenshot({ path: join(ARTIFACTS, `${name}.png`) });
-const state = (page) => page.evaluate(() => document.body.dataset.state);
-const errorText = (page) => page.locator("#error").textContent();
-
-/** Waits for `wanted`; fails at once, with the page's message, when the page shows an error instead. */
-async function waitState(page, wanted) {
-  await page.waitForFunction(
-    (w) => document.body.dataset.state === w || document.body.dataset.state === "error",
-    wanted,
-    { timeout: TIMEOUT },
-  );
-  const now = await state(page);
-  if (now !== wanted) assert.fail(`expected state ${wanted}, got ${now}: ${await errorText(page)}`);
-}
-
-/** Predicts (button) and waits until a new prediction has finished. */
-async function predict(page, trigger = () => page.click("#predict")) {
-  const before = await page.evaluate(() => Number(document.body.dataset.predictions ?? 0));
-  await trigger();
-  await page.waitForFunction(
-    (n) => Number(document.body.dataset.predictions ?? 0) > n || document.body.dataset.state === "error",
-    before,
-    { timeout: TIMEOUT },
-  );
-  await waitState(page, "predicted");
-}
-
-/** Statistics of a canvas's pixels: mean and standard deviation of the RGB values, and a hash. */
-function pixels(page, id) {
-  return page.evaluate((id) => {
-    const c = document.getElementById(id);
-    const d = c.getContext("2d").getImageData(0, 0, c.width, c.height).data;
-    let sum = 0;
-    let sq = 0;
-    let n = 0;
-    let hash = 2166136261;
-    for (let i = 0; i < d.length; i++) {
-      if (i % 4 === 3) continue;
-      sum += d[i];
-      sq += d[i] * d[i];
-      n++;
-      hash = Math.imul(hash ^ d[i], 16777619) >>> 0;
-    }
-    const mean = sum / n;
-    return { mean, std: Math.sqrt(Math.max(0, sq / n - mean * mean)), hash };
-  }, id);
-}
-
-/** The predicted output at a fixed step: frame, σ map and joint plot. */
-async function output(page, step = 20) {
-  await page.locator("#scrubber").fill(String(step));
-  const frame = await pixels(page, "frame-pred");
-  const sigma = await pixels(page, "sigma-map");
-  const plot = await pixels(page, "joints-plot");
-  return `${frame.hash}/${sigma.hash}/${plot.hash}`;
-}
-
-/** Polls a Node-side condition (what page.waitForFunction does in the page). */
-async function waitFor(condition, what, timeout = TIMEOUT) {
-  const end = Date.now() + timeout;
-  while (!condition()) {
-    if (Date.now() > end) assert.fail(`timed out waiting for ${what}`);
-    await new Promise((ok) => setTimeout(ok, 50));
-  }
-}
-
-/**
- * Runs in the page or in a worker: counts the calls of the wasm package's `Model.encode`,
- * `decode` and `predict` in that thread (into `self.inferenceCalls`), by patching the package
- * instance the thread imported (the same URL resolves to the same module). In the page, that
- * it is the initialised instance shows in `placementRegion` answering without an init call;
- * in the workers, in the calls counted.
- */
-async function countInference() {
-  const base = self.document ? document.baseURI : self.location.href;
-  const pkg = await import(new URL("../pkg/dmbn.js", base).href);
-  if (self.document) pkg.placementRegion();
-  const calls = (self.inferenceCalls = { encode: 0, decode: 0, predict: 0, decodedTargets: 0 });
-  const proto = pkg.Model.prototype;
-  for (const name of ["encode", "decode", "predict"]) {
-    const original = proto[name];
-    proto[name] = function (...args) {
-      calls[name]++;
-      if (name === "decode") calls.decodedTargets += args[1].length;
-      return original.apply(this, args);
-    };
-  }
-}
-
-/**
- * The largest per-channel difference between the #frame-pred canvas (drawn at the model's
- * resolution, so no scaling) and the wasm API's mean frame `k`, predicted in the page from the
- * weights `file` and the observations the URL names (episode by action and seed, mode t,
- * images + joints); also against another step's frame and another model's, which must differ.
- */
-function drawnAgainstWasm(page, k, file, { otherStep, otherModel }) {
-  return page.evaluate(
-    async ({ k, file, otherStep, otherModel }) => {
-      const pkg = await import(new URL("../pkg/dmbn.js", document.baseURI).href);
-      await pkg.default({ module_or_path: new URL("../pkg/dmbn_bg.wasm", document.baseURI) });
-      const q = new URLSearchParams(location.search);
-      if (q.get("mode") !== "t" || q.get("observe") !== "both" || q.has("x")) throw new Error(`not the inputs computed here: ${q}`);
-      const seed = Number(q.get("seed"));
-      const steps = q.get("obs").split(",").map(Number);
-      const canvas = document.getElementById("frame-pred");
-      const episode = pkg.runEpisode(q.get("action"), seed, canvas.width);
-      const ev = episode.evalSequence("t", seed);
-      const S = canvas.width;
-      const px = S * S * 3;
-      const all = { frames: ev.frames(), joints: ev.joints(), times: ev.times() };
-      const frames = new Uint8Array(steps.length * px);
-      const joints = new Float32Array(steps.length * 7);
-      steps.forEach((s, i) => {
-        frames.set(all.frames.subarray(s * px, (s + 1) * px), i * px);
-        joints.set(all.joints.subarray(s * 7, (s + 1) * 7), i * 7);
-      });
-      const times = Float32Array.from(steps, (s) => all.times[s]);
-      const predict = async (name) => {
-        const bytes = new Uint8Array(await (await fetch(`../assets/models/${name}`)).arrayBuffer());
-        const model = pkg.Model.fromBytes(bytes);
-        if (model.imageSize !== S) throw new Error(`${name} predicts ${model.imageSize}×${model.imageSize} frames, the canvas is ${S}×${S}`);
-        const p = model.predict(frames, joints, times, all.times, 0.5);
-        model.free();
-        return p;
-      };
-      const drawn = canvas.getContext("2d").getImageData(0, 0, S, S).data;
-      const largest = (rgb) => {
-        let worst = 0;
-        for (let i = 0; i < S * S; i++) {
-          for (let c = 0; c < 3; c++) worst = Math.max(worst, Math.abs(drawn[4 * i + c] - rgb[3 * i + c]));
-        }
-        return worst;
-      };
-      const same = await predict(file);
-      const other = await predict(otherModel);
-      const out = { expected: largest(same.meanFrame(k)), otherStep: largest(same.meanFrame(otherStep)), otherModel: largest(other.meanFrame(k)) };
-      same.free();
-      other.free();
-      ev.free();
-      episode.free();
-      return out;
-    },
-    { k, file, otherStep, otherModel },
-  );
-}
-
-/** Stops playback, so frames only change when a test asks. */
-async function pause(page) {
-  if ((await page.getAttribute("#play", "aria-pressed")) === "true") await page.click("#play");
-}
+import {
+  close,
+  countInference,
+  drawnAgainstWasm,
+  errorText,
+  open,
+  output,
+  pause,
+  pixels,
+  predict,
+  ROOT,
+  server,
+  shot,
+  state,
+  waitFor,
+  waitState,
+} from "./support.mjs";
 
 describe("demo page", () => {
   test("loads to ready, with every control labelled", async () => {

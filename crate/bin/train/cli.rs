@@ -7,7 +7,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 use dmbn::augment::TimeWarpConfig;
 use dmbn::data::id_list;
-use dmbn::model::{ModelConfig, ModelKind};
+use dmbn::model::{read_header, ModelConfig, ModelKind};
 use dmbn::train::{Schedule, TrainConfig, TrainError, Trainer};
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -26,9 +26,14 @@ struct Args {
     /// unless given.
     #[arg(long, required_unless_present = "resume")]
     data: Option<PathBuf>,
-    /// Which network (with --resume, the checkpoint's: may be left out).
-    #[arg(long, value_enum, required_unless_present = "resume")]
+    /// Which network (with --resume or --init, the checkpoint's or the file's: may be left out).
+    #[arg(long, value_enum, required_unless_present_any = ["resume", "init"])]
     model: Option<ModelKind>,
+    /// Start from this model file's weights and joint normalisation instead of fresh weights
+    /// (train a shipped model longer, or fine-tune it on other data); the network, frame size
+    /// and σ floor are the file's.
+    #[arg(long, conflicts_with = "resume")]
+    init: Option<PathBuf>,
     /// Output folder for metrics, checkpoints and the final model.
     #[arg(long)]
     out: PathBuf,
@@ -131,6 +136,17 @@ pub fn main() -> ExitCode {
     }
 }
 
+/// The model config in the header of the `--init` file.
+fn init_config(path: &std::path::Path) -> Result<ModelConfig, TrainError> {
+    let bytes = std::fs::read(path).map_err(|e| TrainError::Io {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    })?;
+    read_header(&bytes)
+        .map(|header| header.config)
+        .map_err(|e| TrainError::config("init", format!("{}: {e}", path.display())))
+}
+
 /// The flags' defaults: the library's, so that they are written once.
 fn defaults() -> TrainConfig {
     TrainConfig::new(ModelConfig::new(ModelKind::Pte), 1, 0)
@@ -157,17 +173,33 @@ fn run(args: Args) -> Result<(), TrainError> {
             field: "steps",
             message: "missing: pass --steps N".into(),
         })?;
-        // Both are required unless resuming (clap checks).
-        let (Some(model), Some(data)) = (model, args.data.as_deref()) else {
-            return Err(TrainError::config(
-                "model",
-                "missing: pass --model and --data",
-            ));
+        // Required unless resuming (clap checks).
+        let Some(data) = args.data.as_deref() else {
+            return Err(TrainError::config("data", "missing: pass --data"));
         };
-        let model = ModelConfig::new(model)
-            .with_image_size(args.image_size)
-            .with_joint_weight(args.joint_weight)
-            .with_sigma_floor(args.sigma_floor);
+        let init = args.init.as_deref().map(init_config).transpose()?;
+        let kind = match (model, &init) {
+            (Some(kind), Some(file)) if kind != file.kind => {
+                return Err(TrainError::config(
+                    "model",
+                    format!(
+                        "--init holds a {} model, not {kind}: leave --model out to train it",
+                        file.kind
+                    ),
+                ))
+            }
+            (Some(kind), _) => kind,
+            (None, Some(file)) => file.kind,
+            (None, None) => return Err(TrainError::config("model", "missing: pass --model")),
+        };
+        // A file's network, frame size and σ floor are its own; the loss's joint weight is the run's.
+        let model = init
+            .unwrap_or_else(|| {
+                ModelConfig::new(kind)
+                    .with_image_size(args.image_size)
+                    .with_sigma_floor(args.sigma_floor)
+            })
+            .with_joint_weight(args.joint_weight);
         let mut config = TrainConfig::new(model, steps, args.seed);
         config.batch = args.batch;
         config.max_contexts = args.max_contexts;
@@ -195,6 +227,7 @@ fn run(args: Args) -> Result<(), TrainError> {
         config.checkpoint_every = args.checkpoint_every;
         config.quality_sequences = args.quality_sequences;
         config.augment = args.augment.then(TimeWarpConfig::default);
+        config.init = args.init.clone();
         Trainer::new(data, &args.out, config)?
     };
     let steps = trainer.config().steps;

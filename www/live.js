@@ -1,0 +1,176 @@
+// Live mode: the episode plays, the steps seen so far (every k-th, the observation rule) are the
+// observations, and the unseen rest of the action is forecast again each time they change; each
+// finished forecast's error joins the live error plot.
+
+import { BLENDS, LIVE_CHUNK, MODEL_NAMES, MODELS } from "./config.js";
+import { render } from "./draw.js";
+import { drawErrors } from "./error_plot.js";
+import { loadModel } from "./models.js";
+import { clampInt, updateObsInfo } from "./observations.js";
+import { pause } from "./playback.js";
+import { JOINTS } from "./plot.js";
+import { cancelPrediction, observations, predict } from "./prediction.js";
+import { state } from "./state.js";
+import { settle, showError } from "./status.js";
+import { ui } from "./ui.js";
+
+/** The observation rule: observe every `every`-th step. */
+export function every() {
+  return clampInt(ui.liveEvery.value, 1, 100);
+}
+
+/** The steps the rule has observed once `step` is reached: 0, k, 2k, … ≤ step. */
+export function seenSteps(step, k = every()) {
+  const steps = [];
+  for (let s = 0; s <= step; s += k) steps.push(s);
+  return steps;
+}
+
+/** What a forecast is made from: model, modalities and the seen steps. */
+function forecastKey(steps) {
+  return `${ui.model.value}|${ui.observe.value}|${steps.join(",")}`;
+}
+
+/** The step changed (playback, scrubbing): forecast again when the seen observations changed. */
+export function follow(step) {
+  if (state.shown?.mode === "live") forecastNow(step);
+}
+
+/**
+ * Forecasts the rest of the action after the last seen observation, now: a forecast (or a model
+ * comparison) still running is cancelled, never queued.
+ */
+export function forecastNow(step = state.step) {
+  const { shown } = state;
+  if (!shown || shown.mode !== "live" || state.fatal) return;
+  const steps = seenSteps(step);
+  const key = forecastKey(steps);
+  // The forecast on screen (or coming) is already made from these observations.
+  if (key === state.seenKey && state.prediction?.mode === "live") return;
+  stopComparing();
+  state.observed = new Set(steps);
+  state.seenKey = key;
+  updateObsInfo();
+  const from = steps[steps.length - 1] + 1;
+  document.body.dataset.seen = String(from);
+  // Everything observed: the last forecast stays on screen.
+  if (from >= shown.len) return render();
+  predict({ from, chunk: LIVE_CHUNK });
+}
+
+/** The error curves of the episode on screen under the current rule and modalities. */
+function curves() {
+  const key = [state.episode?.digest, every(), ui.observe.value, state.shown?.len].join("|");
+  if (state.curves.key !== key) state.curves = { key, byModel: new Map() };
+  return state.curves.byModel;
+}
+
+/** Adds a forecast's error at `from` (steps seen) to `model`'s curve and redraws the plot. */
+function record(model, from, error) {
+  const byModel = curves();
+  const points = (byModel.get(model) ?? []).filter((p) => p.from !== from);
+  points.push({ from, seen: from / state.shown.len, jointRmse: error.joint_rmse, imageMse: error.image_mse });
+  points.sort((a, b) => a.from - b.from);
+  byModel.set(model, points);
+  redrawErrors();
+}
+
+export function redrawErrors() {
+  if (!state.shown) return;
+  drawErrors(ui.errorPlot, curves(), MODEL_NAMES, state.shown.mode === "live" ? state.observed.size && state.step / (state.shown.len - 1) : null);
+}
+
+/** The benchmark's error of a forecast of the steps from `from` on (RGB bytes, joints). */
+function forecastError(from, mean, jointMean) {
+  const { shown } = state;
+  const px = shown.size * shown.size * 3;
+  return state.wasm.forecastError(shown.frames.subarray(from * px), shown.joints.subarray(from * JOINTS), mean, jointMean);
+}
+
+/** A live forecast finished (prediction.js): its error, for the plot and for automation. */
+export function forecastDone(p) {
+  const px = p.size * p.size * 3;
+  const error = forecastError(p.from, p.mean.subarray(p.from * px), p.jointMean.subarray(p.from * JOINTS));
+  p.error = error;
+  record(p.model, p.from, error);
+  state.timings.live.push({
+    model: p.model,
+    from: p.from,
+    steps: p.len - p.from,
+    observed: p.observed,
+    // From the observation coming in: to the first chunk drawn, and to the whole forecast.
+    first_chunk_ms: p.firstAt - p.asked,
+    total_ms: performance.now() - p.asked,
+    joint_rmse: error.joint_rmse,
+    image_mse: error.image_mse,
+  });
+}
+
+/** Stops a running comparison (its request is cancelled). */
+function stopComparing() {
+  if (!state.comparing) return;
+  state.comparing.stop();
+  state.comparing = null;
+  ui.compare.textContent = "compare models";
+  ui.compareInfo.textContent = "";
+}
+
+/**
+ * Every model's whole curve on this episode: the forecast from each observation point of the
+ * rule, one model after another, without drawing the forecasts. Playback pauses; a step change
+ * or a new episode stops it.
+ */
+export async function compareModels() {
+  if (state.comparing) return stopComparing();
+  const { shown } = state;
+  if (!shown || shown.mode !== "live") return;
+  pause();
+  cancelPrediction();
+  let stopped = false;
+  let running = null;
+  const run = {
+    stop: () => {
+      stopped = true;
+      running?.cancel();
+    },
+  };
+  state.comparing = run;
+  ui.compare.textContent = "stop comparing";
+  const points = seenSteps(shown.len - 2);
+  const blend = BLENDS[ui.observe.value];
+  try {
+    for (const model of Object.keys(MODELS)) {
+      await loadModel(model);
+      for (const [i, last] of points.entries()) {
+        if (stopped) return;
+        ui.compareInfo.textContent = `${MODEL_NAMES[model]}: ${i + 1} / ${points.length}`;
+        const from = last + 1;
+        const n = shown.len - from;
+        const px = shown.size * shown.size * 3;
+        const mean = new Uint8Array(n * px);
+        const jointMean = new Float32Array(n * JOINTS);
+        const { frames, joints, times } = observations(seenSteps(last));
+        const targets = Float32Array.from(shown.times.subarray(from));
+        const chunk = Math.ceil(n / state.inference.count);
+        running = state.inference.predict({ model, frames, joints, times, targets, blend, chunk, delay: 0 }, (c) => {
+          mean.set(c.mean, c.start * px);
+          jointMean.set(c.jointMean, c.start * JOINTS);
+        });
+        const reply = await running.done;
+        if (stopped || reply.type !== "done") return;
+        record(model, from, forecastError(from, mean, jointMean));
+      }
+    }
+  } catch (err) {
+    if (!stopped) showError(err);
+  } finally {
+    if (state.comparing === run) {
+      state.comparing = null;
+      ui.compare.textContent = "compare models";
+      ui.compareInfo.textContent = "";
+      document.body.dataset.compared = String(Number(document.body.dataset.compared ?? 0) + 1);
+      forecastNow();
+      settle();
+    }
+  }
+}
