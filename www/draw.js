@@ -19,7 +19,7 @@ export function show(k) {
 export function render() {
   const { shown, prediction: p, step } = state;
   if (!shown) {
-    drawJoints(ui.plot, null);
+    drawJoints(ui.plot, ui.plotCursor, null);
     return;
   }
   const live = shown.mode === "live";
@@ -59,7 +59,7 @@ export function render() {
     step,
   });
   if (live) redrawErrors();
-  state.stepAt = drawJoints(ui.plot, {
+  state.stepAt = drawJoints(ui.plot, ui.plotCursor, {
     len: shown.len,
     joints: shown.joints,
     observed: observedSteps(),

@@ -14,7 +14,7 @@ const GAP = 18;
 
 /**
  * Draws `byModel` (model id → [{seen (0-1), jointRmse, imageMse}] sorted by seen) into `canvas`;
- * `names` labels the models; `now` (0-1, or null) marks the current step.
+ * `names` labels the models; `now` (0-1, or null) marks the fraction seen now.
  */
 export function drawErrors(canvas, byModel, names, now) {
   const { g, w, h } = fit(canvas);

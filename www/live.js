@@ -13,6 +13,7 @@ import { cancelPrediction, observations, predict } from "./prediction.js";
 import { state } from "./state.js";
 import { settle, showError } from "./status.js";
 import { ui } from "./ui.js";
+import { cssSize } from "./views.js";
 
 /** The observation rule: observe every `every`-th step. */
 export function every() {
@@ -61,7 +62,7 @@ export function forecastNow(step = state.step) {
 /** The error curves of the episode on screen under the current rule and modalities. */
 function curves() {
   const key = [state.episode?.digest, every(), ui.observe.value, state.shown?.len].join("|");
-  if (state.curves.key !== key) state.curves = { key, byModel: new Map() };
+  if (state.curves.key !== key) state.curves = { key, byModel: new Map(), version: 0 };
   return state.curves.byModel;
 }
 
@@ -72,12 +73,24 @@ function record(model, from, error) {
   points.push({ from, seen: from / state.shown.len, jointRmse: error.joint_rmse, imageMse: error.image_mse });
   points.sort((a, b) => a.from - b.from);
   byModel.set(model, points);
+  state.curves.version++;
   redrawErrors();
 }
 
+/** What the error plot was last drawn from: it is redrawn only when that changes. */
+let errorsDrawnFrom = "";
+
+/** Draws the error plot, the fraction of the action seen marked. */
 export function redrawErrors() {
-  if (!state.shown) return;
-  drawErrors(ui.errorPlot, curves(), MODEL_NAMES, state.shown.mode === "live" ? state.observed.size && state.step / (state.shown.len - 1) : null);
+  const { shown } = state;
+  if (!shown) return;
+  const now = shown.mode === "live" && state.observed.size ? (Math.max(...state.observed) + 1) / shown.len : null;
+  const byModel = curves();
+  const { w, h } = cssSize(ui.errorPlot);
+  const key = [window.devicePixelRatio, w, h, state.curves.key, state.curves.version, now].join("|");
+  if (key === errorsDrawnFrom) return;
+  errorsDrawnFrom = key;
+  drawErrors(ui.errorPlot, byModel, MODEL_NAMES, now);
 }
 
 /** The benchmark's error of a forecast of the steps from `from` on (RGB bytes, joints). */

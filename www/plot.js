@@ -1,7 +1,7 @@
 // The 7 joint curves as small multiples on one canvas: the true (shown) values, the predicted
 // mean with its ±2σ band as far as the prediction has come, the observed points and a cursor.
 
-import { fit, MUTED, panelFrame } from "./views.js";
+import { cssSize, fit, MUTED, panelFrame } from "./views.js";
 
 export const JOINTS = 7;
 export const JOINT_NAMES = ["base", "shoulder", "elbow", "wrist 1", "wrist 2", "wrist 3", "gripper"];
@@ -17,13 +17,18 @@ const GAP = { x: 14, y: 12 };
 const PAD = { left: 40, right: 6, top: 18, bottom: 16 };
 const TRUE = "#e6e9ef";
 
+/** Per canvas: what its panels were last drawn from. */
+const drawnFrom = new WeakMap();
+
 /**
- * Draws into `canvas` (sized from its CSS box at the device pixel ratio).
+ * Draws into `canvas` (sized from its CSS box at the device pixel ratio) and the step cursor
+ * into `cursor`, a transparent canvas over it: the panels are redrawn only when the data
+ * change, so that playback redraws the cursors alone.
  * `data`: {len, joints (T×7 true), observed (sorted steps), step, prediction: null or
- * {done (Uint8Array T), jointMean, jointSigma}}. Returns a function mapping a client x to a step.
+ * {done (Uint8Array T), jointMean, jointSigma, count}}. Returns a function mapping a client x to a step.
  */
-export function drawJoints(canvas, data) {
-  const { g, w, h } = fit(canvas);
+export function drawJoints(canvas, cursor, data) {
+  const { w, h } = cssSize(canvas);
   const cols = w < NARROW ? NARROW_COLS : COLS;
   const rows = Math.ceil((JOINTS + 1) / cols);
   canvas.dataset.columns = String(cols);
@@ -33,9 +38,18 @@ export function drawJoints(canvas, data) {
   for (let j = 0; j < cols * rows; j++) {
     cells.push({ x: (j % cols) * (cw + GAP.x), y: Math.floor(j / cols) * (ch + GAP.y), w: cw, h: ch });
   }
-  drawLegend(g, cells[JOINTS]);
+  const p = data?.prediction;
+  const key = [window.devicePixelRatio, w, h, data?.len, data?.joints, data?.observed.join(","), p, p?.count];
+  const last = drawnFrom.get(canvas);
+  if (!last || key.some((v, i) => v !== last[i])) {
+    const { g } = fit(canvas);
+    drawLegend(g, cells[JOINTS]);
+    if (data && data.len >= 1) for (let j = 0; j < JOINTS; j++) drawJoint(g, cells[j], j, data);
+    drawnFrom.set(canvas, key);
+  }
+  const { g } = fit(cursor);
   if (!data || data.len < 1) return () => 0;
-  for (let j = 0; j < JOINTS; j++) drawJoint(g, cells[j], j, data);
+  for (let j = 0; j < JOINTS; j++) drawCursor(g, cells[j], data);
   const pw = cw - PAD.left - PAD.right;
   // Client x → step, using the column under the pointer.
   return (clientX) => {
@@ -47,7 +61,7 @@ export function drawJoints(canvas, data) {
   };
 }
 
-function drawJoint(g, cell, j, { len, joints, observed, step, prediction }) {
+function drawJoint(g, cell, j, { len, joints, observed, prediction }) {
   const left = cell.x + PAD.left;
   const right = cell.x + cell.w - PAD.right;
   const top = cell.y + PAD.top;
@@ -153,15 +167,20 @@ function drawJoint(g, cell, j, { len, joints, observed, step, prediction }) {
     g.stroke();
   }
 
-  // Cursor.
-  const cx = Math.round(x(step)) + 0.5;
+  g.restore();
+}
+
+/** The step cursor over a joint's panel. */
+function drawCursor(g, cell, { len, step }) {
+  const left = cell.x + PAD.left;
+  const right = cell.x + cell.w - PAD.right;
+  const cx = Math.round(left + (len > 1 ? (step / (len - 1)) * (right - left) : 0)) + 0.5;
   g.strokeStyle = "rgba(230, 233, 239, 0.55)";
   g.lineWidth = 1;
   g.beginPath();
-  g.moveTo(cx, top);
-  g.lineTo(cx, bottom);
+  g.moveTo(cx, cell.y + PAD.top);
+  g.lineTo(cx, cell.y + cell.h - PAD.bottom);
   g.stroke();
-  g.restore();
 }
 
 function drawLegend(g, cell) {

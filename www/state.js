@@ -19,8 +19,8 @@ export const state = {
   prediction: null,
   /** Live mode: the seen observations the forecast on screen was made from ("0,5,10"). */
   seenKey: "",
-  /** Live mode: the error curves of the episode on screen, {key, byModel: Map(model → points)}. */
-  curves: { key: "", byModel: new Map() },
+  /** Live mode: the error curves of the episode on screen, {key, byModel: Map(model → points), version}. */
+  curves: { key: "", byModel: new Map(), version: 0 },
   /** Live mode: the running model comparison, {stop}, or null. */
   comparing: null,
   /** Once a prediction has been asked for, any change of settings predicts again. */

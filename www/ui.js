@@ -42,6 +42,7 @@ export const ui = {
   trueLabel: $("true-label"),
   timeline: $("timeline"),
   plot: $("joints-plot"),
+  plotCursor: $("joints-cursor"),
   play: $("play"),
   scrubber: $("scrubber"),
   counter: $("counter"),

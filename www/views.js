@@ -30,11 +30,31 @@ export function clearFrame(canvas) {
   g.fillRect(0, 0, canvas.width, canvas.height);
 }
 
+/** CSS box sizes of the canvases `watchSize` observes, kept as they change. */
+const sizes = new WeakMap();
+
+/**
+ * Keeps the CSS sizes of `canvases` (so that drawing them never reads layout: a read after
+ * the page changed forces a layout in the middle of every animation frame) and calls
+ * `onResize` when one changes.
+ */
+export function watchSize(canvases, onResize) {
+  const observer = new ResizeObserver((entries) => {
+    for (const e of entries) sizes.set(e.target, { w: e.contentRect.width, h: e.contentRect.height });
+    onResize();
+  });
+  for (const canvas of canvases) observer.observe(canvas);
+}
+
+/** A canvas's CSS box: as `watchSize` keeps it, or read from the layout. */
+export function cssSize(canvas) {
+  return sizes.get(canvas) ?? { w: canvas.clientWidth, h: canvas.clientHeight };
+}
+
 /** Sizes a canvas's backing store to its CSS box at the device pixel ratio; returns the context. */
 export function fit(canvas) {
   const dpr = window.devicePixelRatio || 1;
-  const w = canvas.clientWidth;
-  const h = canvas.clientHeight;
+  const { w, h } = cssSize(canvas);
   if (canvas.width !== Math.round(w * dpr) || canvas.height !== Math.round(h * dpr)) {
     canvas.width = Math.round(w * dpr);
     canvas.height = Math.round(h * dpr);

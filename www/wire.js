@@ -11,6 +11,7 @@ import { state } from "./state.js";
 import { clearError, settle } from "./status.js";
 import { ui } from "./ui.js";
 import { writeUrl } from "./url.js";
+import { watchSize } from "./views.js";
 
 /** The observed steps changed: list them, link them, and predict again when live. */
 export function observationsChanged() {
@@ -156,8 +157,6 @@ export function wire() {
     render();
     if (state.region) drawTableMap();
   };
-  new ResizeObserver(redraw).observe(ui.plot);
-  new ResizeObserver(redraw).observe(ui.timeline);
-  new ResizeObserver(redraw).observe(ui.errorPlot);
+  watchSize([ui.plot, ui.plotCursor, ui.timeline, ui.errorPlot], redraw);
   sigmaOverlay();
 }
