@@ -114,6 +114,8 @@ export function forecastDone(p) {
     // From the observation coming in: to the first chunk drawn, and to the whole forecast.
     first_chunk_ms: p.firstAt - p.asked,
     total_ms: performance.now() - p.asked,
+    // Of which the slowest worker's encoding of the observations.
+    encode_ms: p.encodeMs,
     joint_rmse: error.joint_rmse,
     image_mse: error.image_mse,
   });

@@ -149,6 +149,7 @@ function finish(p, reply) {
   const len = p.len - from;
   p.complete = true;
   p.totalMs = performance.now() - p.start;
+  p.encodeMs = reply.encodeMs;
   if (mode === "live") forecastDone(p);
   // A counter that automation can wait on: it changes with every finished prediction.
   document.body.dataset.predictions = String(Number(document.body.dataset.predictions ?? 0) + 1);
