@@ -104,7 +104,6 @@ function forecastError(from, mean, jointMean) {
 export function forecastDone(p) {
   const px = p.size * p.size * 3;
   const error = forecastError(p.from, p.mean.subarray(p.from * px), p.jointMean.subarray(p.from * JOINTS));
-  p.error = error;
   record(p.model, p.from, error);
   state.timings.live.push({
     model: p.model,
@@ -153,6 +152,7 @@ export async function compareModels() {
   ui.compare.textContent = "stop comparing";
   const points = seenSteps(shown.len - 2);
   const blend = BLENDS[ui.observe.value];
+  const px = shown.size * shown.size * 3;
   try {
     for (const model of Object.keys(MODELS)) {
       await loadModel(model);
@@ -161,7 +161,6 @@ export async function compareModels() {
         ui.compareInfo.textContent = `${MODEL_NAMES[model]}: ${i + 1} / ${points.length}`;
         const from = last + 1;
         const n = shown.len - from;
-        const px = shown.size * shown.size * 3;
         const mean = new Uint8Array(n * px);
         const jointMean = new Float32Array(n * JOINTS);
         const { frames, joints, times } = observations(seenSteps(last));
