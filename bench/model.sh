@@ -4,7 +4,9 @@
 #   - PyTorch CPU:          bench/torch_dmbn.py (same DMBN, same shapes, same thread count)
 #   - burn wasm (node):     bench/model.mjs (simd128, shipped weights; the 100 steps on one
 #                           thread and split over THREADS workers, as the page runs them)
-# then prints the medians and the ratios the README quotes. Sets up a venv with torch in
+# then prints the medians and the ratios the README quotes, and checks that the PyTorch twin
+# (python/dmbn_torch.py) loaded from every exported shipped model predicts what `dmbn predict`
+# does (tests/exchange.rs, within 1e-4). Sets up a venv with torch in
 # $HOME/.cache/dmbn/venv on first use (pip; about 1-3 GB).
 #
 # Usage: bash bench/model.sh [THREADS]   (default: all cores)
@@ -15,10 +17,10 @@ threads="${1:-$(nproc)}"
 export RAYON_NUM_THREADS="$threads"
 
 venv="$HOME/.cache/dmbn/venv"
-if ! "$venv/bin/python" -c "import torch" 2>/dev/null; then
+if ! "$venv/bin/python" -c "import torch, safetensors" 2>/dev/null; then
   say "setting up $venv with torch (once)"
   python3 -m venv "$venv"
-  "$venv/bin/pip" install --quiet torch numpy
+  "$venv/bin/pip" install --quiet torch numpy safetensors
 fi
 
 say "burn native (flex), $threads threads"
@@ -32,6 +34,10 @@ say "burn wasm (node, simd128)"
 wasm-pack build --release --target nodejs --out-dir pkg-node --no-typescript >/dev/null 2>&1
 out=$(node bench/model.mjs --workers "$threads"); echo "$out"
 wasm=$(sed -n 's/^json: //p' <<<"$out")
+
+say "pytorch twin against dmbn predict (every shipped model)"
+DMBN_PYTHON="$venv/bin/python" cargo test --test exchange the_pytorch_twin -- --nocapture 2>&1 |
+  grep -E '"max_abs_diff"|test result'
 
 python3 - "$native" "$torch" "$wasm" <<'PY'
 import json, sys

@@ -74,6 +74,8 @@ pub enum ModelError {
     FileImageSize { expected: usize, found: usize },
     #[error("model file: the weights do not match the header's config: {0}")]
     Weights(String),
+    #[error("safetensors: {0}")]
+    Safetensors(String),
     #[cfg(not(target_arch = "wasm32"))]
     #[error("{}: {source}", path.display())]
     Io {

@@ -34,6 +34,8 @@ mod maps;
 #[allow(clippy::module_inception)]
 mod model;
 mod prediction;
+#[cfg(not(target_arch = "wasm32"))]
+pub mod safetensors_file;
 mod start;
 #[cfg(test)]
 mod testing;
@@ -61,6 +63,10 @@ pub use joint_encoder::{JointEncoder, JointEncoderConfig};
 pub use loss::{gaussian_loss, joint_nll, Loss, LossValues};
 pub use model::{Model, Network};
 pub use prediction::{AttentiveContexts, ContextEncodings, Prediction, Representation};
+#[cfg(not(target_arch = "wasm32"))]
+pub use safetensors_file::{
+    export_file, export_safetensors, import_file, import_safetensors, SafetensorsHeader,
+};
 pub use start::{FrameStart, JointStart, Start};
 pub use time_embedding::{TimeEmbedding, TimeEmbeddingConfig};
 pub use time_projection::{TimeProjection, TimeProjectionConfig};

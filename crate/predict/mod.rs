@@ -3,13 +3,18 @@
 //! by a [`Predictor`], which then decodes any number of target times in chunks into a
 //! [`SequencePrediction`] (mean and σ per pixel and per joint, back in dataset units).
 //! [`pixel_sigma`] and [`heat_map`] turn σ into the colour map shown by the CLI and the page,
-//! both scaled by [`SequencePrediction::max_image_sigma`].
+//! both scaled by [`SequencePrediction::max_image_sigma`]. Natively, [`prediction_arrays`] saves
+//! a prediction with its inputs for comparison with other implementations.
+#[cfg(not(target_arch = "wasm32"))]
+mod arrays;
 mod heat_map;
 mod observations;
 mod predictor;
 mod scores;
 mod sequence_prediction;
 
+#[cfg(not(target_arch = "wasm32"))]
+pub use arrays::prediction_arrays;
 pub use heat_map::{heat_map, heat_map_rgb, pixel_sigma};
 pub use observations::Observations;
 pub use predictor::Predictor;

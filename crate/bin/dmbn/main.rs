@@ -9,6 +9,8 @@ mod error;
 #[cfg(not(target_arch = "wasm32"))]
 mod eval;
 #[cfg(not(target_arch = "wasm32"))]
+mod exchange;
+#[cfg(not(target_arch = "wasm32"))]
 mod inspect;
 #[cfg(not(target_arch = "wasm32"))]
 mod output;
@@ -28,7 +30,7 @@ mod simulate;
 #[command(
     name = "dmbn",
     version,
-    about = "DMBN datasets and models: simulate, inspect, predict, eval, probe, score"
+    about = "DMBN datasets and models: simulate, inspect, predict, eval, probe, score, export, import"
 )]
 struct Cli {
     #[command(subcommand)]
@@ -50,7 +52,8 @@ enum Command {
     ///
     /// Writes mean/<k>.png (predicted frames), sigma/<k>.png (σ heat maps, one scale for the
     /// sequence), truth/<k>.png, joints.png (true, predicted mean, ±2σ band, observed points)
-    /// and scores.json; prints MSE and NLL of both modalities.
+    /// and scores.json (with --arrays also prediction.safetensors); prints MSE and NLL of both
+    /// modalities.
     Predict(predict::PredictArgs),
     /// Reconstruct a t, p or f sequence from K observations (the paper's Figures 2-3).
     ///
@@ -71,6 +74,15 @@ enum Command {
     /// table per scenario (joint RMSE in radians, gripper error, image MSE, errors at the
     /// observed steps, object visibility, NLL); --json writes them.
     Score(score::ScoreArgs),
+    /// Write a model file's weights as safetensors for PyTorch (python/dmbn_torch.py).
+    ///
+    /// Every tensor under its PyTorch twin's name and layout (Conv2d [out, in, kh, kw],
+    /// Linear [out, in], LayerNorm weight/bias); the model's kind, config and joint
+    /// normalisation as the metadata entry `dmbn`.
+    Export(exchange::ExportArgs),
+    /// Write a model file from safetensors (from `dmbn export` or PyTorch), so that weights
+    /// trained in PyTorch run natively and in the page.
+    Import(exchange::ImportArgs),
 }
 
 #[cfg(not(target_arch = "wasm32"))]
@@ -83,6 +95,8 @@ fn main() -> std::process::ExitCode {
         Command::Eval(args) => eval::run(args),
         Command::Probe(args) => probe::run(args),
         Command::Score(args) => score::run(args),
+        Command::Export(args) => exchange::export(args),
+        Command::Import(args) => exchange::import(args),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,

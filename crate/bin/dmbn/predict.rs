@@ -8,11 +8,11 @@ use serde::Serialize;
 
 use dmbn::data::{Sequence, JOINTS};
 use dmbn::figure::{joint_plot, save_png, JointPlot};
-use dmbn::predict::{Observations, Scores, SequencePrediction};
+use dmbn::predict::{prediction_arrays, Observations, Scores, SequencePrediction};
 
 use crate::args::{load, parse_blend, parse_sequence};
 use crate::error::CliError;
-use crate::output::{create_dir, write_json};
+use crate::output::{create_dir, write, write_json};
 
 #[derive(Args)]
 pub struct PredictArgs {
@@ -34,6 +34,10 @@ pub struct PredictArgs {
     /// Output folder (created if missing; files in it are replaced).
     #[arg(long)]
     out: PathBuf,
+    /// Also write prediction.safetensors: the observations and every predicted value
+    /// unrounded (for python/dmbn_torch.py `check`, or numpy).
+    #[arg(long)]
+    arrays: bool,
 }
 
 /// What `scores.json` holds.
@@ -70,6 +74,10 @@ pub fn run(args: PredictArgs) -> Result<(), CliError> {
         scores,
     };
     write_json(&args.out.join("scores.json"), &report)?;
+    if args.arrays {
+        let bytes = prediction_arrays(&observations, args.blend, &prediction)?;
+        write(&args.out.join("prediction.safetensors"), &bytes)?;
+    }
     println!(
         "{} on {id}/{action} ({} steps), observed {:?}, blend {}",
         report.model,

@@ -1,0 +1,526 @@
+"""The PyTorch twin of dmbn's models: DMBN, DMBN-PTE and the attentive model, layer for layer.
+
+Load the weights `dmbn export` writes and predict as `dmbn predict` does:
+
+    import dmbn_torch
+    model = dmbn_torch.load("dmbn-sim.safetensors")          # eval mode, on the CPU
+    out = model.predict(frames, joints, times, target_times, blend=0.5)
+    out["joint_mean"], out["joint_sigma"]                     # [T, 7], radians
+    out["image_mean"], out["image_sigma"]                     # [T, S, S, 3], in [0, 1]
+
+`frames` are the observed RGB frames as uint8 `[N, S, S, 3]`, `joints` the observed joint
+values `[N, 7]` (not normalised), `times` their phases in [0, 1], `target_times` the phases to
+predict; `blend` is c: 1 = frames only, 0 = joints only. The model works on normalised joints
+(`model.normalization`); `predict` maps them in and out. Modules and tensor names follow the
+Rust sources (crate/model/), so `model.state_dict()` holds exactly the exported tensors, and
+`save(model, path)` writes weights trained here in the file `dmbn import` reads.
+
+Command line:
+    python dmbn_torch.py check MODEL.safetensors PREDICTION.safetensors [--tolerance 1e-4] [--out F]
+compares this twin with `dmbn predict --arrays` (the inputs are in the prediction file) and
+exits 1 when any value differs by more than the tolerance.
+
+Needs torch and safetensors (pip install torch safetensors numpy).
+"""
+import argparse
+import json
+import math
+import sys
+
+import torch
+import torch.nn as nn
+import torch.nn.functional as F
+
+# Architecture constants of crate/model (the original DMBN's widths).
+ENCODER_FILTERS = {64: [32, 64, 128, 128, 256], 128: [32, 64, 64, 128, 128, 256]}
+DECODER_FILTERS = {64: [256, 128, 64, 64, 32], 128: [256, 128, 128, 64, 64, 32]}
+JOINT_ENCODER_LAYERS = [32, 64, 64, 128, 128, 256]
+JOINT_DECODER_LAYERS = [512, 216, 128, 32]
+IMAGE_DECODER_TAIL = [16, 8]
+SHARED = 1024
+JOINTS = 7
+START_FEATURES = 9
+ATTENTION_HEADS = 8
+# How fast the attentive model's own predictions fade in away from an observation (start.rs).
+OBSERVED_WIDTH = 0.02
+# Score of a padding slot before the attention softmax (burn's MultiHeadAttention min_float).
+MASKED_SCORE = -1.0e4
+# Target times decoded per forward pass (Predictor::CHUNK).
+CHUNK = 25
+
+
+def bounded_sigma(raw, floor):
+    """σ = floor + (1 − floor)·softplus(raw)."""
+    return floor + (1.0 - floor) * F.softplus(raw)
+
+
+def conv3x3(inputs, outputs):
+    return nn.Conv2d(inputs, outputs, 3, padding=1)
+
+
+class ImageEncoder(nn.Module):
+    """Conv 3x3 + ReLU + MaxPool 2x2 blocks down to 2x2, flatten, Dense H + ReLU."""
+
+    def __init__(self, channels, filters, hidden):
+        super().__init__()
+        convs = []
+        for f in filters:
+            convs.append(conv3x3(channels, f))
+            channels = f
+        self.convs = nn.ModuleList(convs)
+        self.dense = nn.Linear(channels * 4, hidden)
+
+    def forward(self, x):
+        for conv in self.convs:
+            x = F.max_pool2d(F.relu(conv(x)), 2)
+        return F.relu(self.dense(x.flatten(1)))
+
+
+class JointEncoder(nn.Module):
+    """Dense 32, 64, 64, 128, 128, 256, H, all ReLU."""
+
+    def __init__(self, inputs, hidden):
+        super().__init__()
+        layers = []
+        for width in JOINT_ENCODER_LAYERS + [hidden]:
+            layers.append(nn.Linear(inputs, width))
+            inputs = width
+        self.layers = nn.ModuleList(layers)
+
+    def forward(self, x):
+        for layer in self.layers:
+            x = F.relu(layer(x))
+        return x
+
+
+class TimeProjection(nn.Module):
+    """DMBN-PTE's P(t): Linear 1 → H."""
+
+    def __init__(self, hidden):
+        super().__init__()
+        self.linear = nn.Linear(1, hidden)
+
+    def forward(self, times):
+        return self.linear(times.unsqueeze(-1))
+
+
+class ContextProjection(nn.Module):
+    """g_m: Linear H → H, LayerNorm, tanh."""
+
+    def __init__(self, hidden):
+        super().__init__()
+        self.linear = nn.Linear(hidden, hidden)
+        self.norm = nn.LayerNorm(hidden, eps=1e-5)
+
+    def forward(self, x):
+        return torch.tanh(self.norm(self.linear(x)))
+
+
+class TimeEmbedding(nn.Module):
+    """The attentive model's queries and keys: Linear 1 → H, ReLU, Linear H → H."""
+
+    def __init__(self, hidden):
+        super().__init__()
+        self.hidden = nn.Linear(1, hidden)
+        self.output = nn.Linear(hidden, hidden)
+
+    def forward(self, times):
+        return self.output(F.relu(self.hidden(times.unsqueeze(-1))))
+
+
+class MultiHeadAttention(nn.Module):
+    """burn's MultiHeadAttention (no dropout at inference): per-head scaled dot products,
+    padding scored MASKED_SCORE, softmax, output projection."""
+
+    def __init__(self, hidden, heads):
+        super().__init__()
+        self.heads = heads
+        self.query = nn.Linear(hidden, hidden)
+        self.key = nn.Linear(hidden, hidden)
+        self.value = nn.Linear(hidden, hidden)
+        self.output = nn.Linear(hidden, hidden)
+
+    def forward(self, query, key, value, padding):
+        b, m, h = query.shape
+        d = h // self.heads
+
+        def split(x, linear):
+            return linear(x).reshape(b, x.shape[1], self.heads, d).transpose(1, 2)
+
+        q, k, v = split(query, self.query), split(key, self.key), split(value, self.value)
+        scores = q @ k.transpose(-1, -2) / math.sqrt(d)
+        scores = scores.masked_fill(padding[:, None, None, :], MASKED_SCORE)
+        context = torch.softmax(scores, -1) @ v
+        return self.output(context.transpose(1, 2).reshape(b, m, h))
+
+
+class ImageDecoder(nn.Module):
+    """2x2 start, Conv 3x3 + ReLU + nearest UpSampling x2 blocks, Conv 16, Conv 8, mean
+    (sigmoid) and σ heads; gated (the attentive model), a gate head mixes the mean with the
+    interpolated observed frames."""
+
+    def __init__(self, filters, sigma_floor, gated):
+        super().__init__()
+        channels, convs = SHARED // 4, []
+        for f in filters:
+            convs.append(conv3x3(channels, f))
+            channels = f
+        self.blocks = nn.ModuleList(convs)
+        tail = []
+        for f in IMAGE_DECODER_TAIL:
+            tail.append(conv3x3(channels, f))
+            channels = f
+        self.tail = nn.ModuleList(tail)
+        self.mean = conv3x3(channels, 3)
+        self.sigma = conv3x3(channels, 3)
+        self.gate = conv3x3(channels, 1) if gated else None
+        self.sigma_floor = sigma_floor
+
+    def forward(self, x, start=None):
+        y = x.reshape(x.shape[0], SHARED // 4, 2, 2)
+        for i, conv in enumerate(list(self.blocks) + list(self.tail)):
+            if 0 < i <= len(self.blocks):
+                y = F.interpolate(y, scale_factor=2, mode="nearest")
+            y = F.relu(conv(y))
+        drawn = torch.sigmoid(self.mean(y))
+        sigma = bounded_sigma(self.sigma(y), self.sigma_floor)
+        if self.gate is None or start is None:
+            return drawn, sigma
+        frames, observed, near = start
+        g = (torch.sigmoid(self.gate(y)) * (1 - near) + near) * observed
+        return frames * g + drawn * (1 - g), sigma
+
+
+class JointDecoder(nn.Module):
+    """Dense 512, 216, 128, 32 (ReLU), mean and σ heads; given a start, the mean is a scaled
+    correction of the interpolated observations."""
+
+    def __init__(self, sigma_floor):
+        super().__init__()
+        inputs, layers = SHARED, []
+        for width in JOINT_DECODER_LAYERS:
+            layers.append(nn.Linear(inputs, width))
+            inputs = width
+        self.layers = nn.ModuleList(layers)
+        self.mean = nn.Linear(inputs, JOINTS)
+        self.sigma = nn.Linear(inputs, JOINTS)
+        self.sigma_floor = sigma_floor
+
+    def forward(self, x, start=None):
+        for layer in self.layers:
+            x = F.relu(layer(x))
+        mean = self.mean(x)
+        if start is not None:
+            joints, scale = start
+            mean = joints + mean * scale
+        return mean, bounded_sigma(self.sigma(x), self.sigma_floor)
+
+
+class Decoder(nn.Module):
+    """The shared Dense 1024 + ReLU, then the image and joint decoders."""
+
+    def __init__(self, inputs, filters, sigma_floor, gated=False):
+        super().__init__()
+        self.shared = nn.Linear(inputs, SHARED)
+        self.image = ImageDecoder(filters, sigma_floor, gated)
+        self.joint = JointDecoder(sigma_floor)
+
+    def forward(self, x, start=None):
+        b, m, _ = x.shape
+        x = F.relu(self.shared(x.reshape(b * m, -1)))
+        image_mean, image_sigma = self.image(x, start and start.frames())
+        joint_mean, joint_sigma = self.joint(x, start and start.joints())
+        s = image_mean.shape[-1]
+        return {
+            "image_mean": image_mean.reshape(b, m, 3, s, s),
+            "image_sigma": image_sigma.reshape(b, m, 3, s, s),
+            "joint_mean": joint_mean.reshape(b, m, JOINTS),
+            "joint_sigma": joint_sigma.reshape(b, m, JOINTS),
+        }
+
+
+def masked_mean(z, mask):
+    """Mean over each sequence's real contexts: [B, N, H] and a [B, N] 0/1 mask to [B, H]."""
+    count = mask.sum(1, keepdim=True).clamp_min(1.0)
+    return (z * mask.unsqueeze(2)).sum(1) / count
+
+
+def blend(image, joint, c):
+    """r = c·image + (1 − c)·joint, c of shape [B]."""
+    c = c.reshape(-1, *([1] * (image.dim() - 1)))
+    return image * c + joint * (1 - c)
+
+
+class Contexts:
+    """One batch of observations, as the model sees them: `frames` [B, N, 3, S, S] in [0, 1],
+    normalised `joints` [B, N, 7], `times` [B, N], `mask` [B, N] (1 real, 0 padding) and the
+    blending coefficient `blend` [B]."""
+
+    def __init__(self, frames, joints, times, mask, blend):
+        self.frames, self.joints, self.times, self.mask, self.blend = frames, joints, times, mask, blend
+
+
+class Dmbn(nn.Module):
+    """DMBN, time as an input channel: [t plane, RGB] and (t, joints) encoded, masked mean per
+    modality, blended, [r, t_target] decoded."""
+
+    def __init__(self, config):
+        super().__init__()
+        s, h = config["image_size"], config["hidden"]
+        self.image_encoder = ImageEncoder(4, ENCODER_FILTERS[s], h)
+        self.joint_encoder = JointEncoder(8, h)
+        self.decoder = Decoder(h + 1, DECODER_FILTERS[s], config["sigma_floor"])
+
+    def encode(self, c):
+        b, n, _, s, _ = c.frames.shape
+        plane = c.times.reshape(b, n, 1, 1, 1).expand(b, n, 1, s, s)
+        images = torch.cat([plane, c.frames], 2).reshape(b * n, 4, s, s)
+        image = self.image_encoder(images).reshape(b, n, -1)
+        joint = self.joint_encoder(torch.cat([c.times.unsqueeze(2), c.joints], 2))
+        return blend(masked_mean(image, c.mask), masked_mean(joint, c.mask), c.blend)
+
+    def decode(self, r, target_times):
+        m = target_times.shape[1]
+        x = torch.cat([r.unsqueeze(1).expand(-1, m, -1), target_times.unsqueeze(2)], 2)
+        return self.decoder(x)
+
+
+class _PteEncoders(nn.Module):
+    """DMBN-PTE's context encoding z_m = g_m(e_m(x) + P(t)), shared with the attentive model."""
+
+    def _pte_init(self, config):
+        s, h = config["image_size"], config["hidden"]
+        self.image_encoder = ImageEncoder(3, ENCODER_FILTERS[s], h)
+        self.joint_encoder = JointEncoder(7, h)
+        self.time = TimeProjection(h)
+        self.image_projection = ContextProjection(h)
+        self.joint_projection = ContextProjection(h)
+
+    def encode_contexts(self, c):
+        b, n, _, s, _ = c.frames.shape
+        image = self.image_encoder(c.frames.reshape(b * n, 3, s, s)).reshape(b, n, -1)
+        time = self.time(c.times)
+        joint = self.joint_encoder(c.joints)
+        return self.image_projection(image + time), self.joint_projection(joint + time)
+
+
+class DmbnPte(_PteEncoders):
+    """DMBN-PTE, time as context: masked mean of z per modality, blended, r − P(t_target)
+    decoded."""
+
+    def __init__(self, config):
+        super().__init__()
+        self._pte_init(config)
+        self.decoder = Decoder(config["hidden"], DECODER_FILTERS[config["image_size"]],
+                               config["sigma_floor"])
+
+    def encode(self, c):
+        image, joint = self.encode_contexts(c)
+        return blend(masked_mean(image, c.mask), masked_mean(joint, c.mask), c.blend)
+
+    def decode(self, r, target_times):
+        x = r.unsqueeze(1) - self.time(target_times)
+        return self.decoder(x)
+
+
+class Start:
+    """Where the attentive model's decoders start: the observations linearly interpolated to
+    the target times (held outside them), nothing for an unobserved modality."""
+
+    def __init__(self, c, target_times):
+        self.weights, self.gaps = interpolation(target_times, c.times, c.mask)
+        self.observed = torch.stack([(c.blend > 0).float(), (c.blend < 1).float()], 1)
+        self.c = c
+
+    def interpolated_joints(self):
+        return (self.weights @ self.c.joints) * self.observed[:, 1, None, None]
+
+    def features(self):
+        return torch.cat([self.interpolated_joints(), self.gaps], 2)
+
+    def nearness(self):
+        return torch.exp(-self.gaps.min(2).values / OBSERVED_WIDTH)
+
+    def frames(self):
+        b, m, n = self.weights.shape
+        frames = self.c.frames
+        k, (ch, s) = b * m, frames.shape[2:4]
+        interpolated = (self.weights @ frames.reshape(b, n, -1)).reshape(k, ch, s, s)
+        observed = self.observed[:, 0, None].expand(b, m).reshape(k, 1, 1, 1)
+        return interpolated, observed, self.nearness().reshape(k, 1, 1, 1)
+
+    def joints(self):
+        b, m, _ = self.weights.shape
+        scale = 1 - self.nearness() * self.observed[:, 1, None]
+        return self.interpolated_joints().reshape(b * m, JOINTS), scale.reshape(b * m, 1)
+
+
+def interpolation(target_times, times, mask):
+    """Per target, each context's linear interpolation weight [B, M, N] and the distances to
+    the nearest observation before and after it [B, M, 2] (capped at 1), as
+    crate/model/interpolation.rs."""
+    b, m = target_times.shape
+    n = times.shape[1]
+    weights = torch.zeros(b, m, n)
+    gaps = torch.ones(b, m, 2)
+    for s in range(b):
+        real = [i for i in range(n) if mask[s, i] > 0.5]
+        t = times[s].tolist()
+        for j, target in enumerate(target_times[s].tolist()):
+            before = [i for i in real if t[i] <= target]
+            after = [i for i in real if t[i] >= target]
+            a = max(before, key=lambda i: t[i]) if before else None
+            z = min(after, key=lambda i: t[i]) if after else None
+            if a is not None and z is not None and t[z] > t[a]:
+                w = (target - t[a]) / (t[z] - t[a])
+                weights[s, j, a], weights[s, j, z] = 1 - w, w
+            elif a is not None or z is not None:
+                weights[s, j, a if a is not None else z] = 1.0
+            if before:
+                gaps[s, j, 0] = min(min(abs(t[i] - target) for i in before), 1.0)
+            if after:
+                gaps[s, j, 1] = min(min(abs(t[i] - target) for i in after), 1.0)
+    return weights, gaps
+
+
+class DmbnAttn(_PteEncoders):
+    """The attentive model: DMBN-PTE's z per context, cross-attention over the context times
+    per target and modality, blended, − P(t_target), + the observed modalities' embedding and
+    a projection of where the decoders start; the decoders start from the interpolated
+    observations."""
+
+    def __init__(self, config):
+        super().__init__()
+        self._pte_init(config)
+        h = config["hidden"]
+        heads = config.get("heads") or ATTENTION_HEADS
+        self.time_embedding = TimeEmbedding(h)
+        self.image_attention = MultiHeadAttention(h, heads)
+        self.joint_attention = MultiHeadAttention(h, heads)
+        self.observed = nn.Parameter(torch.zeros(2, h))
+        self.start_projection = nn.Linear(START_FEATURES, h)
+        self.decoder = Decoder(h, DECODER_FILTERS[config["image_size"]], config["sigma_floor"],
+                               gated=True)
+
+    def encode(self, c):
+        image, joint = self.encode_contexts(c)
+        return {"contexts": c, "image": image, "joint": joint,
+                "keys": self.time_embedding(c.times)}
+
+    def decode(self, r, target_times):
+        c = r["contexts"]
+        queries = self.time_embedding(target_times)
+        padding = c.mask < 0.5
+        image = self.image_attention(queries, r["keys"], r["image"], padding)
+        joint = self.joint_attention(queries, r["keys"], r["joint"], padding)
+        start = Start(c, target_times)
+        x = (blend(image, joint, c.blend) - self.time(target_times)
+             + (start.observed @ self.observed).unsqueeze(1)
+             + self.start_projection(start.features()))
+        return self.decoder(x, start)
+
+
+KINDS = {"dmbn": Dmbn, "pte": DmbnPte, "attn": DmbnAttn}
+
+
+class Predictor(nn.Module):
+    """A model with the joint normalisation it was trained with: `predict` takes and returns
+    dataset units, as the Rust `Predictor`."""
+
+    def __init__(self, header):
+        super().__init__()
+        self.header = header
+        self.config = header["config"]
+        self.normalization = header["normalization"]
+        self.network = KINDS[self.config["kind"]](self.config)
+
+    def state_dict_for_export(self):
+        return {k.removeprefix("network."): v for k, v in self.state_dict().items()}
+
+    @torch.no_grad()
+    def predict(self, frames, joints, times, target_times, blend=0.5):
+        s = self.config["image_size"]
+        frames = torch.as_tensor(frames)
+        if tuple(frames.shape[1:]) != (s, s, 3):
+            raise ValueError(f"frames: expected [N, {s}, {s}, 3] uint8, found {list(frames.shape)}")
+        mean = torch.tensor(self.normalization["mean"])
+        std = torch.tensor(self.normalization["std"])
+        joints = (torch.as_tensor(joints, dtype=torch.float32) - mean) / std
+        n = joints.shape[0]
+        contexts = Contexts(
+            frames=(frames.float() / 255.0).permute(0, 3, 1, 2).unsqueeze(0),
+            joints=joints.unsqueeze(0),
+            times=torch.as_tensor(times, dtype=torch.float32).reshape(1, n),
+            mask=torch.ones(1, n),
+            blend=torch.tensor([float(blend)]),
+        )
+        r = self.network.encode(contexts)
+        target_times = torch.as_tensor(target_times, dtype=torch.float32)
+        parts = [self.network.decode(r, chunk.unsqueeze(0)) for chunk in target_times.split(CHUNK)]
+        out = {k: torch.cat([p[k][0] for p in parts]) for k in parts[0]}
+        return {
+            "image_mean": out["image_mean"].permute(0, 2, 3, 1),
+            "image_sigma": out["image_sigma"].permute(0, 2, 3, 1),
+            "joint_mean": out["joint_mean"] * std + mean,
+            "joint_sigma": out["joint_sigma"] * std,
+        }
+
+
+def load(path):
+    """The model in a safetensors file written by `dmbn export` (or `save`), in eval mode."""
+    from safetensors import safe_open
+    from safetensors.torch import load_file
+
+    with safe_open(path, "pt") as f:
+        metadata = f.metadata() or {}
+    if "dmbn" not in metadata:
+        raise ValueError(f"{path}: no `dmbn` metadata: not written by `dmbn export`")
+    model = Predictor(json.loads(metadata["dmbn"]))
+    tensors = {"network." + k: v.float() for k, v in load_file(path).items()}
+    model.load_state_dict(tensors, strict=True)
+    return model.eval()
+
+
+def save(model, path):
+    """Writes `model` (a Predictor) for `dmbn import`: its tensors and its header."""
+    from safetensors.torch import save_file
+
+    header = dict(model.header, producer="dmbn_torch.py")
+    tensors = {k: v.detach().contiguous() for k, v in model.state_dict_for_export().items()}
+    save_file(tensors, path, metadata={"dmbn": json.dumps(header)})
+
+
+def check(model_path, prediction_path, tolerance, out_path=None):
+    """The largest difference between this twin and `dmbn predict --arrays`, per output;
+    returns whether all are within `tolerance`. With `out_path`, saves the twin's prediction
+    there (same names and shapes)."""
+    from safetensors.torch import load_file, save_file
+
+    arrays = load_file(prediction_path)
+    model = load(model_path)
+    out = model.predict(arrays["observed_frames"], arrays["observed_joints"],
+                        arrays["observed_times"], arrays["target_times"],
+                        float(arrays["blend"][0]))
+    if out_path:
+        save_file({k: v.contiguous() for k, v in out.items()}, out_path)
+    worst = {k: float((out[k] - arrays[k]).abs().max()) for k in out}
+    ok = all(v <= tolerance for v in worst.values())
+    print(json.dumps({"model": model.config["kind"], "max_abs_diff": worst,
+                      "tolerance": tolerance, "ok": ok}))
+    return ok
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    sub = parser.add_subparsers(dest="command", required=True)
+    c = sub.add_parser("check", help="compare with `dmbn predict --arrays`")
+    c.add_argument("model")
+    c.add_argument("prediction")
+    c.add_argument("--tolerance", type=float, default=1e-4)
+    c.add_argument("--out", help="also save the twin's prediction (safetensors)")
+    args = parser.parse_args()
+    sys.exit(0 if check(args.model, args.prediction, args.tolerance, args.out) else 1)
+
+
+if __name__ == "__main__":
+    main()
