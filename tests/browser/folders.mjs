@@ -35,9 +35,11 @@ export function png(rgb, size) {
   return Buffer.concat([Buffer.from([137, 80, 78, 71, 13, 10, 26, 10]), chunk("IHDR", header), chunk("IDAT", deflateSync(raw)), chunk("IEND", Buffer.alloc(0))]);
 }
 
-/** Rows of `width` numbers, one line per step (JS's shortest round trip reads back to the same f32). */
+/** A number as text that reads back to the same f32 (JS's shortest round trip; -0 kept). */
+const number = (v) => (Object.is(v, -0) ? "-0" : String(v));
+/** Rows of `width` numbers, one line per step. */
 const table = (values, width) =>
-  Array.from({ length: values.length / width }, (_, k) => Array.from(values.subarray(k * width, (k + 1) * width)).join(" ") + "\n").join("");
+  Array.from({ length: values.length / width }, (_, k) => Array.from(values.subarray(k * width, (k + 1) * width), number).join(" ") + "\n").join("");
 
 /**
  * Writes the episodes `[{action, seed}]` of the wasm package `wasm` at `size` px as sequences
