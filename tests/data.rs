@@ -6,8 +6,8 @@ use std::fs;
 use std::path::{Path, PathBuf};
 
 use dmbn::data::{
-    joint_path, object_path, read_sequence, write_sequence, DataError, Dataset, DatasetWriter,
-    Sequence, Summary,
+    joint_path, object_path, read_sequence, read_sequence_from, write_sequence, DataError, Dataset,
+    DatasetWriter, MemoryFiles, Sequence, Summary,
 };
 use image::codecs::jpeg::JpegEncoder;
 use image::codecs::png::PngEncoder;
@@ -452,6 +452,97 @@ fn inconsistent_sequences_are_not_written() {
     let err = write_sequence(root.path(), 1, "../up", &fixture(1, 8, 0)).unwrap_err();
     assert!(matches!(err, DataError::ActionName { .. }));
     assert_eq!(fs::read_dir(root.path()).unwrap().count(), 0);
+}
+
+/// Every file under `root` in memory, named `<name>/<path inside root>` as a browser names
+/// the files of a folder the user chose; `bytes` false lists them without their bytes.
+fn in_memory(root: &Path, name: &str, bytes: bool) -> MemoryFiles {
+    fn walk(dir: &Path, out: &mut Vec<PathBuf>) {
+        for e in fs::read_dir(dir).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                walk(&p, out);
+            } else {
+                out.push(p);
+            }
+        }
+    }
+    let mut paths = Vec::new();
+    walk(root, &mut paths);
+    let rel = |p: &Path| format!("{name}/{}", p.strip_prefix(root).unwrap().display());
+    let mut files = MemoryFiles::new(paths.iter().map(|p| rel(p)));
+    if bytes {
+        for p in &paths {
+            files.put(&rel(p), fs::read(p).unwrap());
+        }
+    }
+    files
+}
+
+#[test]
+fn folder_in_memory_reads_as_on_disk() {
+    let (root, _dir) = written(8, &fixture(5, 16, 3));
+    write_sequence(root.path(), 8, "move", &fixture(3, 16, 1)).unwrap();
+    fs::write(root.path().join("LICENSE"), "MIT").unwrap();
+    let files = in_memory(root.path(), "mine", true);
+    let disk = Dataset::open(root.path()).unwrap();
+    let memory = Dataset::list(&files, "mine").unwrap();
+    assert_eq!(memory.len(), disk.len());
+    for (m, d) in memory.sequences().iter().zip(disk.sequences()) {
+        assert_eq!((m.id, &m.action), (d.id, &d.action));
+        assert_eq!(m.dir, Path::new("mine/8").join(&d.action));
+        for size in [None, Some(8)] {
+            assert_eq!(
+                read_sequence_from(&files, &m.dir, m.id, size).unwrap(),
+                disk.read(d, size).unwrap()
+            );
+        }
+    }
+    // Without the bytes, listing works and reading names the file.
+    let listed = in_memory(root.path(), "mine", false);
+    assert_eq!(Dataset::list(&listed, "mine").unwrap().len(), 2);
+    assert!(read_sequence_from(&listed, Path::new("mine/8/grasp"), 8, None).is_err());
+}
+
+#[test]
+fn folder_in_memory_reports_the_disk_errors() {
+    // Each breakage gives the disk reader's message, with the path inside the folder.
+    type Break = fn(&Path);
+    let breaks: [(&str, Break); 5] = [
+        ("malformed row", |dir| {
+            replace_line(&joint_path(dir, 8), 2, "1 2 x")
+        }),
+        ("missing joint file", |dir| {
+            fs::remove_file(joint_path(dir, 8)).unwrap()
+        }),
+        ("too few frames", |dir| {
+            fs::remove_file(dir.join("2.png")).unwrap()
+        }),
+        ("not an image", |dir| {
+            fs::write(dir.join("1.png"), "text").unwrap()
+        }),
+        ("non-numeric", |dir| {
+            replace_line(&object_path(dir, 8), 3, "0.5 abc 1.0")
+        }),
+    ];
+    for (what, break_it) in breaks {
+        let (root, dir) = written(8, &fixture(4, 8, 0));
+        break_it(&dir);
+        let disk = read_sequence(&dir, 8, None).unwrap_err().to_string();
+        let files = in_memory(root.path(), "mine", true);
+        let memory = read_sequence_from(&files, Path::new("mine/8/grasp"), 8, None)
+            .unwrap_err()
+            .to_string();
+        let prefix = format!("{}", root.path().display());
+        assert_eq!(memory, disk.replace(&prefix, "mine"), "{what}");
+    }
+    // A folder without sequence folders.
+    let empty = tempfile::tempdir().unwrap();
+    fs::write(empty.path().join("LICENSE"), "MIT").unwrap();
+    let files = in_memory(empty.path(), "mine", true);
+    let err = Dataset::list(&files, "mine").unwrap_err();
+    assert!(matches!(err, DataError::NoSequences { .. }), "{err}");
+    assert_message(&err, &["mine: no sequences found"]);
 }
 
 #[test]

@@ -9,7 +9,7 @@ mod golden_prediction;
 mod golden_score;
 
 use dmbn::web::{
-    heat_map, placement_region, run_episode, Episode, ModelHandle, Prediction, Simulator,
+    heat_map, placement_region, run_episode, Episode, Folder, ModelHandle, Prediction, Simulator,
 };
 use wasm_bindgen::{JsError, JsValue};
 use wasm_bindgen_test::wasm_bindgen_test;
@@ -385,4 +385,94 @@ fn forecast_error_scores_drawn_frames_and_names_bad_layouts() {
     );
     let err = dmbn::web::forecast_error(&frames, &joints, &frames[1..], &joints).unwrap_err();
     assert!(message(err).contains("frames:"));
+}
+
+/// The files of `ep` as sequence 7 of grasp in a folder `mine/`, as the page hands them over:
+/// (relative path, bytes), frames as PNG, rows as `dmbn simulate` writes them.
+fn folder_files(ep: &Episode) -> Vec<(String, Vec<u8>)> {
+    use image::{codecs::png::PngEncoder, ExtendedColorType, ImageEncoder};
+    let table = |values: Vec<f32>, width: usize| -> Vec<u8> {
+        let rows: Vec<String> = values
+            .chunks(width)
+            .map(|r| r.iter().map(f32::to_string).collect::<Vec<_>>().join(" "))
+            .collect();
+        (rows.join("\n") + "\n").into_bytes()
+    };
+    let mut files = vec![
+        (
+            "mine/7/grasp/joint_7.txt".to_string(),
+            table(ep.joints(), 7),
+        ),
+        (
+            "mine/7/grasp/object_7.txt".to_string(),
+            table(ep.object(), 3),
+        ),
+        (
+            "mine/7/grasp/endpoint_7.txt".to_string(),
+            table(ep.endpoint(), 7),
+        ),
+        ("mine/LICENSE".to_string(), b"MIT".to_vec()),
+    ];
+    for k in 0..ep.steps() {
+        let mut png = Vec::new();
+        PngEncoder::new(&mut png)
+            .write_image(&ep.frame(k).unwrap(), 64, 64, ExtendedColorType::Rgb8)
+            .unwrap();
+        files.push((format!("mine/7/grasp/{k}.png"), png));
+    }
+    files
+}
+
+/// A folder of `files`, listed, its sequence 7 read at 64 px: the episode's digest.
+fn read_folder(files: &[(String, Vec<u8>)]) -> Result<String, String> {
+    let mut folder = Folder::new(files.iter().map(|f| f.0.clone()).collect()).map_err(message)?;
+    for path in folder.files_of(7, "grasp").map_err(message)? {
+        let (_, bytes) = files.iter().find(|f| f.0 == path).unwrap();
+        folder.put(&path, bytes.clone());
+    }
+    folder
+        .read(7, "grasp", 64)
+        .map(|e| e.digest())
+        .map_err(message)
+}
+
+#[wasm_bindgen_test]
+fn folder_reads_a_sequence_as_written_and_reports_the_readers_errors() {
+    let ep = grasp7();
+    let mut files = folder_files(&ep);
+    assert_eq!(read_folder(&files).unwrap(), ep.digest());
+    let folder = Folder::new(files.iter().map(|f| f.0.clone()).collect()).unwrap();
+    assert_eq!(folder.root(), "mine");
+
+    files[0].1 = b"1 2 3 4 5 6 7\n1 2 x\n".to_vec();
+    assert_eq!(
+        read_folder(&files).unwrap_err(),
+        "mine/7/grasp/joint_7.txt line 2: expected 7 columns, found 3"
+    );
+    let err = read_folder(&files[1..]).unwrap_err();
+    assert_eq!(err, "mine/7/grasp/joint_7.txt: no such file");
+    let err = read_folder(&files[3..4]).unwrap_err();
+    assert!(err.starts_with("mine: no sequences found"), "{err}");
+    let err = Folder::new(vec!["a/0/grasp/x".into(), "b/0/grasp/y".into()])
+        .map(|_| ())
+        .map_err(message);
+    assert_eq!(
+        err.unwrap_err(),
+        "expected the files of one folder, found a/ and b/"
+    );
+
+    // The joints of the episode lie 0 standard deviations from their own mean.
+    let joints = ep.joints();
+    let mean: Vec<f32> = (0..7)
+        .map(|j| joints.iter().skip(j).step_by(7).sum::<f32>() / ep.steps() as f32)
+        .collect();
+    let near = ep.joint_distance(mean.clone(), vec![1.0; 7]).unwrap();
+    let far = ep
+        .joint_distance(mean.iter().map(|m| m + 3.0).collect(), vec![1.0; 7])
+        .unwrap();
+    assert!(
+        near < far && (far - 9.0 - near).abs() < 1e-3,
+        "{near} {far}"
+    );
+    assert!(ep.joint_distance(vec![0.0; 6], vec![1.0; 7]).is_err());
 }

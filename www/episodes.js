@@ -1,4 +1,5 @@
-// Episodes: simulating one on the main thread, and the sequence shown to the model under the mode.
+// Episodes: simulating one on the main thread (or one read from an opened folder, folder.js),
+// and the sequence shown to the model under the mode.
 
 import { IMAGE_SIZE } from "./config.js";
 import { drawTableMap, show } from "./draw.js";
@@ -29,6 +30,19 @@ export function generate(place = state.episode?.placed ? state.episode.object : 
     return false;
   }
   const ms = performance.now() - t0;
+  ui.sequence.value = "sim";
+  const episode = setEpisode(ep, { action, seed, placed: Boolean(place), ms, folder: null });
+  ui.objectInfo.textContent =
+    `${episode.len} steps simulated in ${ms < 10 ? ms.toFixed(1) : Math.round(ms)} ms · object at ` +
+    `(${episode.object[0].toFixed(3)}, ${episode.object[1].toFixed(3)}) m`;
+  return true;
+}
+
+/**
+ * Makes the wasm Episode `ep` the one on screen — simulated, or read from a folder (`folder`:
+ * {root, id}; `seed` then the id, for the p permutation and random observations) — and plays it.
+ */
+export function setEpisode(ep, { action, seed, placed, ms, folder }) {
   clearError();
   cancelPrediction();
   state.episode?.handle.free();
@@ -38,7 +52,8 @@ export function generate(place = state.episode?.placed ? state.episode.object : 
     handle: ep,
     action,
     seed,
-    placed: Boolean(place),
+    placed,
+    folder,
     len,
     object: [object[0], object[1]],
     end: [object[(len - 1) * 3], object[(len - 1) * 3 + 1]],
@@ -48,12 +63,10 @@ export function generate(place = state.episode?.placed ? state.episode.object : 
   };
   state.episode = episode;
   state.timings.episode_ms = ms;
+  ui.simControls.hidden = Boolean(folder);
   ui.freezeFrom.max = ui.freezeTo.max = String(len);
   if (!(Number(ui.freezeTo.value) > 0) || Number(ui.freezeTo.value) > len) ui.freezeTo.value = String(len);
   if (Number(ui.freezeFrom.value) >= len) ui.freezeFrom.value = String(Math.floor(len / 2));
-  ui.objectInfo.textContent =
-    `${len} steps simulated in ${ms < 10 ? ms.toFixed(1) : Math.round(ms)} ms · object at ` +
-    `(${episode.object[0].toFixed(3)}, ${episode.object[1].toFixed(3)}) m`;
   ui.objectInfo.title = `episode sha256 ${episode.digest}`;
   drawTableMap();
   // Keep the chosen steps that the new episode has; otherwise "random k", seeded by the seed.
@@ -66,7 +79,7 @@ export function generate(place = state.episode?.placed ? state.episode.object : 
   show(0);
   writeUrl();
   play();
-  return true;
+  return episode;
 }
 
 /** The sequence shown to the model under the chosen mode (the p permutation uses the episode seed). */

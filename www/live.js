@@ -2,7 +2,7 @@
 // observations, and the unseen rest of the action is forecast again each time they change; each
 // finished forecast's error joins the live error plot.
 
-import { BLENDS, LIVE_CHUNK, MODEL_NAMES, MODELS } from "./config.js";
+import { BLENDS, LIVE_CHUNK, MODEL_NAMES } from "./config.js";
 import { render } from "./draw.js";
 import { drawErrors } from "./error_plot.js";
 import { loadModel } from "./models.js";
@@ -154,7 +154,7 @@ export async function compareModels() {
   const blend = BLENDS[ui.observe.value];
   const px = shown.size * shown.size * 3;
   try {
-    for (const model of Object.keys(MODELS)) {
+    for (const model of [...ui.model.options].map((o) => o.value)) {
       await loadModel(model);
       for (const [i, last] of points.entries()) {
         if (stopped) return;

@@ -1,6 +1,6 @@
 // The models' weights: loading each once into the workers, and the status line describing them.
 
-import { IMAGE_SIZE, KIND_NAMES, MODEL_NAMES, MODELS, WEIGHTS } from "./config.js";
+import { IMAGE_SIZE, KIND_NAMES, MODEL_NAMES, MODELS, modelsOf, WEIGHTS } from "./config.js";
 import { state } from "./state.js";
 import { clearError, setState, showError } from "./status.js";
 import { ui } from "./ui.js";
@@ -58,5 +58,18 @@ export async function selectModel() {
   if (ui.model.value !== id) return false;
   clearError();
   ui.status.textContent = describeModel(id);
+  return true;
+}
+
+/**
+ * Offers the models trained on `data` ("sim" or "2020") in the Model select, the first chosen,
+ * unless they are offered already. Says whether the choice changed (the caller then loads it).
+ */
+export function offerModels(data) {
+  const ids = modelsOf(data);
+  const offered = [...ui.model.options].map((o) => o.value);
+  if (ids.join() === offered.join()) return false;
+  ui.model.replaceChildren(...ids.map((id) => new Option(MODEL_NAMES[id], id)));
+  ui.model.value = ids[0];
   return true;
 }

@@ -3,6 +3,11 @@
 const $ = (id) => document.getElementById(id);
 
 export const ui = {
+  sequence: $("sequence"),
+  openDataset: $("open-dataset"),
+  dataset: $("dataset"),
+  datasetInfo: $("dataset-info"),
+  simControls: $("sim-controls"),
   action: $("action"),
   seed: $("seed"),
   random: $("random"),

@@ -2,6 +2,7 @@
 
 import { drawTableMap, render, show, sigmaOverlay } from "./draw.js";
 import { buildShown, generate } from "./episodes.js";
+import { droppedFiles, openFolder, pickedFiles, sequenceChosen } from "./folder.js";
 import { selectModel } from "./models.js";
 import { chooseFirst, chooseRandom, updateObsInfo } from "./observations.js";
 import { pause, play, toggle } from "./playback.js";
@@ -66,6 +67,21 @@ function onKey(e) {
 
 export function wire() {
   document.getElementById("controls").addEventListener("submit", (e) => e.preventDefault());
+  ui.sequence.addEventListener("change", sequenceChosen);
+  ui.openDataset.addEventListener("click", () => ui.dataset.click());
+  ui.dataset.addEventListener("change", () => {
+    if (ui.dataset.files.length) openFolder(pickedFiles(ui.dataset.files));
+    ui.dataset.value = "";
+  });
+  // A folder dropped anywhere on the page opens like a chosen one.
+  addEventListener("dragover", (e) => {
+    if (e.dataTransfer?.types.includes("Files")) e.preventDefault();
+  });
+  addEventListener("drop", async (e) => {
+    if (!e.dataTransfer?.items.length || !state.wasm || state.fatal) return;
+    e.preventDefault();
+    openFolder(await droppedFiles(e.dataTransfer.items));
+  });
   ui.action.addEventListener("change", () => generate() && invalidate());
   ui.seed.addEventListener("change", () => generate(null) && invalidate());
   ui.random.addEventListener("click", () => {

@@ -13,7 +13,7 @@
 //   {type: "cancel", target}                stop prediction `target` if it is running
 // Messages out:
 //   {type: "inited", id}
-//   {type: "loaded", id, model, fileKind, imageSize, bytes, fetchMs, parseMs}
+//   {type: "loaded", id, model, fileKind, imageSize, normalization, bytes, fetchMs, parseMs}
 //   {type: "chunk", id, start, count, mean, sigma, maxSigma, jointMean, jointSigma, ms}
 //   {type: "done", id, ms, encodeMs, steps}
 //   {type: "error", id, message}
@@ -87,6 +87,9 @@ const NAMES = {
   dmbn: "DMBN",
   pte: "DMBN-PTE",
   "pte-aug": "DMBN-PTE + time warps",
+  "pte-2020": "DMBN-PTE · original data",
+  "dmbn-2020": "DMBN · original data",
+  "pte-aug-2020": "DMBN-PTE + time warps · original data",
 };
 
 async function fetchModel(id, url) {
@@ -115,6 +118,7 @@ async function fetchModel(id, url) {
     model: id,
     fileKind: model.kind,
     imageSize: model.imageSize,
+    normalization: model.normalization,
     bytes: bytes.length,
     fetchMs: t1 - t0,
     parseMs: performance.now() - t1,

@@ -1,8 +1,7 @@
-use std::fs;
 use std::path::{Path, PathBuf};
 
 use super::layout::valid_action_name;
-use super::{read_sequence, DataError, Sequence, SequenceRef};
+use super::{read_sequence_from, DataError, Disk, Files, Sequence, SequenceRef};
 
 /// A dataset in the DMBN layout: `<root>/<id>/<action>/` folders. Opening only lists the
 /// sequences; reading (and validating) each is [`read`](Self::read)'s job.
@@ -17,18 +16,29 @@ impl Dataset {
     /// non-hidden folder inside it an action. Other entries (a LICENSE file, hidden folders)
     /// are ignored. Sequences are sorted by id, then action name.
     pub fn open(root: impl AsRef<Path>) -> Result<Self, DataError> {
+        Self::list(&Disk, root)
+    }
+
+    /// [`open`](Self::open) on any [`Files`]: the same listing and errors for a folder held
+    /// in memory (the page's). Read its sequences with [`read_sequence_from`] and the same files.
+    pub fn list(files: &impl Files, root: impl AsRef<Path>) -> Result<Self, DataError> {
         let root = root.as_ref().to_path_buf();
-        let meta = fs::metadata(&root).map_err(DataError::io(&root))?;
-        if !meta.is_dir() {
+        if !files.is_dir(&root)? {
             return Err(DataError::NotADirectory { path: root });
         }
         let mut sequences = Vec::new();
-        for (id, id_dir) in subdirs(&root)? {
+        for id in files.folders(&root)? {
+            let id_dir = root.join(&id);
             let Some(id) = parse_id(&id) else { continue };
-            let mut actions: Vec<SequenceRef> = subdirs(&id_dir)?
+            let mut actions: Vec<SequenceRef> = files
+                .folders(&id_dir)?
                 .into_iter()
-                .filter(|(name, _)| valid_action_name(name))
-                .map(|(action, dir)| SequenceRef { id, action, dir })
+                .filter(|name| valid_action_name(name))
+                .map(|action| SequenceRef {
+                    id,
+                    dir: id_dir.join(&action),
+                    action,
+                })
                 .collect();
             if actions.is_empty() {
                 return Err(DataError::NoActions { path: id_dir });
@@ -102,24 +112,8 @@ impl Dataset {
 
     /// Read and validate one sequence; frames resized to `image_size` when given.
     pub fn read(&self, seq: &SequenceRef, image_size: Option<u32>) -> Result<Sequence, DataError> {
-        read_sequence(&seq.dir, seq.id, image_size)
+        read_sequence_from(&Disk, &seq.dir, seq.id, image_size)
     }
-}
-
-/// `(name, path)` of the subdirectories of `dir` with UTF-8 names.
-fn subdirs(dir: &Path) -> Result<Vec<(String, PathBuf)>, DataError> {
-    let mut out = Vec::new();
-    for entry in fs::read_dir(dir).map_err(DataError::io(dir))? {
-        let entry = entry.map_err(DataError::io(dir))?;
-        let path = entry.path();
-        if !path.is_dir() {
-            continue;
-        }
-        if let Ok(name) = entry.file_name().into_string() {
-            out.push((name, path));
-        }
-    }
-    Ok(out)
 }
 
 /// A decimal id folder name (`"7"`, `"40"`); anything else is not an id.

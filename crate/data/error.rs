@@ -14,6 +14,8 @@ pub enum DataError {
         #[source]
         source: io::Error,
     },
+    #[error("{}: no such file", path.display())]
+    MissingFile { path: PathBuf },
     #[error(
         "{}: frame {index} is missing: expected {index}.png or {index}.jpeg, one frame per joint row ({missing} of {rows} missing)",
         dir.display()

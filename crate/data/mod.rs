@@ -10,14 +10,18 @@
 //! Reading validates everything (column counts, numbers, row counts, frame count and size)
 //! and reports the offending file; writing is atomic per file, and [`DatasetWriter`] builds a
 //! whole dataset in a temporary folder renamed into place at the end. Action folders are plain
-//! names here (`"grasp"`, `"move"`) so this module does not depend on the simulator.
+//! names here (`"grasp"`, `"move"`) so this module does not depend on the simulator. The files
+//! are read through [`Files`]: from the disk ([`Disk`]) or from memory ([`MemoryFiles`], the
+//! page's chosen folder), with the same rules and messages.
 mod action_summary;
 mod atomic_write;
 mod dataset;
 mod dataset_writer;
 mod error;
+mod files;
 mod ids;
 mod layout;
+mod memory_files;
 mod normalization;
 mod reader;
 mod sequence;
@@ -30,13 +34,15 @@ pub use atomic_write::write_atomic;
 pub use dataset::Dataset;
 pub use dataset_writer::DatasetWriter;
 pub use error::DataError;
+pub use files::{Disk, Files};
 pub use ids::id_list;
 pub use layout::{
     endpoint_path, image_sizes_text, joint_path, object_path, sequence_dir, IMAGE_SIZES,
     MAX_IMAGE_SIZE,
 };
+pub use memory_files::MemoryFiles;
 pub use normalization::Normalization;
-pub use reader::read_sequence;
+pub use reader::{read_sequence, read_sequence_from};
 pub use sequence::{Sequence, ENDPOINT, JOINTS};
 pub use sequence_ref::SequenceRef;
 pub use sequence_writer::write_sequence;

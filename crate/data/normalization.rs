@@ -70,6 +70,26 @@ impl Normalization {
         std::array::from_fn(|j| (joints[j] - self.mean[j]) / self.std[j])
     }
 
+    /// Mean squared normalised value over every joint of `rows`: how many (squared) standard
+    /// deviations joints lie from the data these statistics come from. The page offers, for a
+    /// folder, the models whose normalisation its joints fit best. Infinite without rows.
+    pub fn distance<'a>(&self, rows: impl IntoIterator<Item = &'a [f32; 7]>) -> f64 {
+        let (mut sum, mut n) = (0.0f64, 0usize);
+        for row in rows {
+            sum += self
+                .normalize(row)
+                .iter()
+                .map(|z| f64::from(*z).powi(2))
+                .sum::<f64>();
+            n += 7;
+        }
+        if n == 0 {
+            f64::INFINITY
+        } else {
+            sum / n as f64
+        }
+    }
+
     /// `joints * std + mean`: back from model space to joint units.
     pub fn denormalize(&self, joints: &[f32; 7]) -> [f32; 7] {
         std::array::from_fn(|j| joints[j] * self.std[j] + self.mean[j])
@@ -96,5 +116,7 @@ mod tests {
         assert_eq!(z[1], 0.0);
         let back = n.denormalize(&z);
         assert_eq!(back, rows[1]);
+        assert_eq!(n.distance(&rows), 2.0 / 7.0);
+        assert_eq!(n.distance(&[]), f64::INFINITY);
     }
 }

@@ -1,13 +1,13 @@
 //! Reading one sequence folder of the DMBN layout, validating every file on the way.
 use std::collections::HashMap;
-use std::fs;
+use std::io;
 use std::path::{Path, PathBuf};
 
 use image::imageops::FilterType;
 use image::RgbImage;
 
 use super::layout::{endpoint_path, joint_path, object_path, MAX_IMAGE_SIZE};
-use super::{DataError, Sequence, ENDPOINT, JOINTS};
+use super::{DataError, Disk, Files, Sequence, ENDPOINT, JOINTS};
 
 /// Frame file extensions, in order of preference when one step has several.
 const FRAME_EXTENSIONS: [&str; 3] = ["png", "jpeg", "jpg"];
@@ -18,15 +18,26 @@ const FRAME_EXTENSIONS: [&str; 3] = ["png", "jpeg", "jpg"];
 /// exact area average when it divides the stored size (128 → 64), otherwise a triangle filter;
 /// both deterministic.
 pub fn read_sequence(dir: &Path, id: u32, image_size: Option<u32>) -> Result<Sequence, DataError> {
+    read_sequence_from(&Disk, dir, id, image_size)
+}
+
+/// [`read_sequence`] on any [`Files`]: the page reads a folder held in memory with the same
+/// rules and messages as the tools read the disk.
+pub fn read_sequence_from(
+    files: &impl Files,
+    dir: &Path,
+    id: u32,
+    image_size: Option<u32>,
+) -> Result<Sequence, DataError> {
     if let Some(size) = image_size {
         if size == 0 || size > MAX_IMAGE_SIZE {
             return Err(DataError::ImageSize { size });
         }
     }
     let joint_file = joint_path(dir, id);
-    let joints: Vec<[f32; JOINTS]> = read_table(&joint_file)?;
-    let object: Vec<[f32; 3]> = read_table(&object_path(dir, id))?;
-    let endpoint: Vec<[f32; ENDPOINT]> = read_table(&endpoint_path(dir, id))?;
+    let joints: Vec<[f32; JOINTS]> = read_table(files, &joint_file)?;
+    let object: Vec<[f32; 3]> = read_table(files, &object_path(dir, id))?;
+    let endpoint: Vec<[f32; ENDPOINT]> = read_table(files, &endpoint_path(dir, id))?;
     let rows = joints.len();
     for (path, found) in [
         (object_path(dir, id), object.len()),
@@ -42,11 +53,11 @@ pub fn read_sequence(dir: &Path, id: u32, image_size: Option<u32>) -> Result<Seq
         }
     }
 
-    let paths = frame_paths(dir, rows)?;
+    let paths = frame_paths(files, dir, rows)?;
     let mut frames = Vec::new();
     let mut size = None;
     for path in &paths {
-        let img = read_frame(path)?;
+        let img = read_frame(files, path)?;
         let expected = *size.get_or_insert(img.width());
         if img.dimensions() != (expected, expected) {
             return Err(DataError::FrameSize {
@@ -72,8 +83,12 @@ pub fn read_sequence(dir: &Path, id: u32, image_size: Option<u32>) -> Result<Seq
 
 /// Parse a whitespace-separated table of `N` finite numbers per row. Trailing blank lines are
 /// allowed; any other line must have exactly `N` values.
-pub(crate) fn read_table<const N: usize>(path: &Path) -> Result<Vec<[f32; N]>, DataError> {
-    let text = fs::read_to_string(path).map_err(DataError::io(path))?;
+fn read_table<const N: usize>(files: &impl Files, path: &Path) -> Result<Vec<[f32; N]>, DataError> {
+    let bytes = files.read(path)?;
+    let text = std::str::from_utf8(&bytes).map_err(|e| DataError::Io {
+        path: path.to_path_buf(),
+        source: io::Error::new(io::ErrorKind::InvalidData, e),
+    })?;
     let lines: Vec<&str> = text.lines().collect();
     let used = lines
         .iter()
@@ -115,13 +130,10 @@ pub(crate) fn read_table<const N: usize>(path: &Path) -> Result<Vec<[f32; N]>, D
 }
 
 /// Paths of frames `0..rows` in `dir`, checking there are enough and none is missing.
-fn frame_paths(dir: &Path, rows: usize) -> Result<Vec<PathBuf>, DataError> {
+fn frame_paths(files: &impl Files, dir: &Path, rows: usize) -> Result<Vec<PathBuf>, DataError> {
     // step index -> (preference, path)
     let mut found: HashMap<usize, (usize, PathBuf)> = HashMap::new();
-    for entry in fs::read_dir(dir).map_err(DataError::io(dir))? {
-        let entry = entry.map_err(DataError::io(dir))?;
-        let name = entry.file_name();
-        let Some(name) = name.to_str() else { continue };
+    for name in files.files(dir)? {
         let Some((stem, ext)) = name.rsplit_once('.') else {
             continue;
         };
@@ -137,7 +149,7 @@ fn frame_paths(dir: &Path, rows: usize) -> Result<Vec<PathBuf>, DataError> {
         let Ok(index) = stem.parse::<usize>() else {
             continue;
         };
-        let path = entry.path();
+        let path = dir.join(&name);
         found
             .entry(index)
             .and_modify(|cur| {
@@ -162,8 +174,8 @@ fn frame_paths(dir: &Path, rows: usize) -> Result<Vec<PathBuf>, DataError> {
 }
 
 /// Decode one frame (format from its content) as RGB8.
-fn read_frame(path: &Path) -> Result<RgbImage, DataError> {
-    let bytes = fs::read(path).map_err(DataError::io(path))?;
+fn read_frame(files: &impl Files, path: &Path) -> Result<RgbImage, DataError> {
+    let bytes = files.read(path)?;
     let img = image::load_from_memory(&bytes).map_err(|source| DataError::CorruptFrame {
         path: path.to_path_buf(),
         source,

@@ -1,7 +1,7 @@
 use wasm_bindgen::prelude::*;
 
 use super::Simulator;
-use crate::data::Sequence;
+use crate::data::{Normalization, Sequence, JOINTS};
 
 /// A whole recorded episode, kept in wasm memory; JS copies out only the arrays it asks for.
 #[wasm_bindgen]
@@ -71,6 +71,20 @@ impl Episode {
                 self.inner.len()
             )))
         }
+    }
+
+    /// How far the episode's joints lie from a model's joint normalisation (`Model.normalization`'s
+    /// `mean` and `std`): the mean squared normalised joint value. The page offers the models
+    /// whose normalisation a folder's sequence fits best. Throws unless both have 7 values.
+    #[wasm_bindgen(js_name = jointDistance)]
+    pub fn joint_distance(&self, mean: Vec<f32>, std: Vec<f32>) -> Result<f64, JsError> {
+        let (Ok(mean), Ok(std)) = (
+            <[f32; JOINTS]>::try_from(mean),
+            <[f32; JOINTS]>::try_from(std),
+        ) else {
+            return Err(JsError::new("expected 7 means and 7 standard deviations"));
+        };
+        Ok(Normalization { mean, std }.distance(&self.inner.joints))
     }
 
     /// SHA-256 (hex) fingerprint of the episode, equal to the native `Sequence::digest`.

@@ -39,6 +39,14 @@ impl ModelHandle {
         self.inner.model().kind().to_string()
     }
 
+    /// The joint normalisation the model was trained with, `{mean, std}` (7 values each): the
+    /// statistics of its training data.
+    #[wasm_bindgen(getter)]
+    pub fn normalization(&self) -> Result<JsValue, JsError> {
+        serde_wasm_bindgen::to_value(self.inner.normalization())
+            .map_err(|e| JsError::new(&e.to_string()))
+    }
+
     /// Frame width and height the model reads and predicts.
     #[wasm_bindgen(getter, js_name = imageSize)]
     pub fn image_size(&self) -> usize {
