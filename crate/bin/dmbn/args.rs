@@ -1,6 +1,8 @@
 //! What several commands take: parsers for their shared arguments, and the model and
 //! sequence that `--model`, `--data` and `--sequence` name.
-use std::path::Path;
+use std::path::PathBuf;
+
+use clap::Args;
 
 use dmbn::data::{Dataset, Sequence};
 use dmbn::predict::Predictor;
@@ -45,16 +47,28 @@ pub fn parse_blend(s: &str) -> Result<f32, String> {
     }
 }
 
-/// The model file at `model` and sequence `id`/`action` of the dataset at `data`, read at the
-/// model's frame size (shared by `predict` and `eval`).
-pub fn load(
-    model: &Path,
-    data: &Path,
-    (id, action): &(u32, String),
-) -> Result<(Predictor, Sequence), CliError> {
-    let predictor = Predictor::load(model)?;
-    let dataset = Dataset::open(data)?;
-    let size = predictor.model().image_size() as u32;
-    let seq = dataset.read(dataset.find(*id, action)?, Some(size))?;
-    Ok((predictor, seq))
+/// A model and one sequence of a dataset (`predict`, `eval`).
+#[derive(Args)]
+pub struct ModelAndSequence {
+    /// Model file (written by `train`).
+    #[arg(long)]
+    pub model: PathBuf,
+    /// Dataset root in the DMBN layout.
+    #[arg(long)]
+    pub data: PathBuf,
+    /// Sequence, as ID/ACTION (e.g. 38/grasp).
+    #[arg(long, value_parser = parse_sequence)]
+    pub sequence: (u32, String),
+}
+
+impl ModelAndSequence {
+    /// The model and the sequence, read at the model's frame size.
+    pub fn load(&self) -> Result<(Predictor, Sequence), CliError> {
+        let predictor = Predictor::load(&self.model)?;
+        let dataset = Dataset::open(&self.data)?;
+        let size = predictor.model().image_size() as u32;
+        let (id, action) = &self.sequence;
+        let seq = dataset.read(dataset.find(*id, action)?, Some(size))?;
+        Ok((predictor, seq))
+    }
 }

@@ -11,21 +11,14 @@ use dmbn::eval::{evaluate, evenly_spaced};
 use dmbn::figure::{eval_figure, save_png};
 use dmbn::predict::Scores;
 
-use crate::args::{load, parse_blend, parse_sequence};
+use crate::args::{parse_blend, ModelAndSequence};
 use crate::error::CliError;
 use crate::output::{create_dir, write_json};
 
 #[derive(Args)]
 pub struct EvalArgs {
-    /// Model file.
-    #[arg(long)]
-    model: PathBuf,
-    /// Dataset root in the DMBN layout.
-    #[arg(long)]
-    data: PathBuf,
-    /// Sequence, as ID/ACTION (e.g. 38/grasp).
-    #[arg(long, value_parser = parse_sequence)]
-    sequence: (u32, String),
+    #[command(flatten)]
+    input: ModelAndSequence,
     /// t: unchanged; p: time stamps permuted; f: frozen (see --freeze).
     #[arg(long, value_parser = parse_mode)]
     mode: EvalMode,
@@ -73,8 +66,8 @@ struct EvalReport {
 }
 
 pub fn run(args: EvalArgs) -> Result<(), CliError> {
-    let (predictor, seq) = load(&args.model, &args.data, &args.sequence)?;
-    let (id, action) = &args.sequence;
+    let (predictor, seq) = args.input.load()?;
+    let (id, action) = &args.input.sequence;
     let mut rng = Pcg64::seed_from_u64(args.seed);
     let shown = EvalSequence::build(args.mode, &seq, args.freeze, &mut rng);
     let observed = evenly_spaced(seq.len(), args.observations as usize);

@@ -10,21 +10,14 @@ use dmbn::data::{Sequence, JOINTS};
 use dmbn::figure::{joint_plot, save_png, JointPlot};
 use dmbn::predict::{prediction_arrays, Observations, Scores, SequencePrediction};
 
-use crate::args::{load, parse_blend, parse_sequence};
+use crate::args::{parse_blend, ModelAndSequence};
 use crate::error::CliError;
 use crate::output::{create_dir, write, write_json};
 
 #[derive(Args)]
 pub struct PredictArgs {
-    /// Model file (written by `train`).
-    #[arg(long)]
-    model: PathBuf,
-    /// Dataset root in the DMBN layout.
-    #[arg(long)]
-    data: PathBuf,
-    /// Sequence to predict, as ID/ACTION (e.g. 3/grasp).
-    #[arg(long, value_parser = parse_sequence)]
-    sequence: (u32, String),
+    #[command(flatten)]
+    input: ModelAndSequence,
     /// Observed steps (context), comma separated step indices.
     #[arg(long, value_delimiter = ',', required = true)]
     observe: Vec<usize>,
@@ -52,8 +45,8 @@ struct Report<'a> {
 }
 
 pub fn run(args: PredictArgs) -> Result<(), CliError> {
-    let (predictor, seq) = load(&args.model, &args.data, &args.sequence)?;
-    let (id, action) = &args.sequence;
+    let (predictor, seq) = args.input.load()?;
+    let (id, action) = &args.input.sequence;
     let observations = Observations::from_sequence(&seq, &args.observe)?;
     let prediction = predictor.predict(&observations, &seq.times(), args.blend)?;
     let scores = Scores::of(
