@@ -96,7 +96,11 @@ export async function predict({ from = 0, chunk = CHUNK, firstAlone = false, kee
   state.prediction = p;
   setState("predicting");
   ui.predLabel.textContent = "predicting…";
-  if (!(await selectModel())) {
+  // A loaded model is asked at once: awaiting it would post the request only after the
+  // caller's drawing (a live forecast's latency). selectModel still updates the status line.
+  if (state.loadedModels.has(model)) {
+    selectModel();
+  } else if (!(await selectModel())) {
     if (state.prediction === p) state.prediction = null;
     return;
   }
