@@ -86,6 +86,91 @@ fn encoding_once_and_decoding_in_chunks_equals_one_call() {
     assert!(joints < 1e-5, "joints differ by {joints}");
 }
 
+/// The largest difference between two predictions' values, against their scale (at least 1).
+fn relative_diff(a: &SequencePrediction, b: &SequencePrediction) -> f32 {
+    let pairs = [
+        (&a.image_mean, &b.image_mean),
+        (&a.image_sigma, &b.image_sigma),
+        (&a.joint_mean, &b.joint_mean),
+        (&a.joint_sigma, &b.joint_sigma),
+    ];
+    pairs
+        .iter()
+        .map(|(x, y)| {
+            assert_eq!(x.len(), y.len());
+            let scale = x.iter().fold(1.0f32, |m, v| m.max(v.abs()));
+            let diff = x.iter().zip(y.iter()).map(|(p, q)| (p - q).abs());
+            diff.fold(0.0, f32::max) / scale
+        })
+        .fold(0.0, f32::max)
+}
+
+/// The page's live forecast encodes each observation once and joins the sets: for every
+/// shipped kind, the joined (and the cut) sets predict what the observations encoded together
+/// do, at every blend.
+#[test]
+fn joined_and_selected_encodings_predict_as_the_observations_encoded_together() {
+    let seq = episode(Action::Grasp, 5, 64).unwrap();
+    let obs = |steps: &[usize]| Observations::from_sequence(&seq, steps).unwrap();
+    let targets: Vec<f32> = seq.times().into_iter().step_by(6).collect();
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/models");
+    for file in ["dmbn-sim.dmbn", "pte-sim.dmbn", "attn-sim.dmbn"] {
+        let predictor = Predictor::load(dir.join(file)).unwrap();
+        let (a, b) = ([0, 10, 20], [31, 45]);
+        let joined = predictor
+            .encode_contexts(&obs(&a))
+            .unwrap()
+            .cat(&predictor.encode_contexts(&obs(&b)).unwrap())
+            .unwrap();
+        assert_eq!(joined.len(), 5);
+        let every = obs(&[0, 10, 20, 31, 45]);
+        let selected = joined.select(&[4, 0, 2]).unwrap();
+        for blend in [0.0, 0.5, 1.0] {
+            let cached = predictor.represent(&joined, blend).unwrap();
+            let cached = predictor.decode(&cached, &targets).unwrap();
+            let whole = predictor.predict(&every, &targets, blend).unwrap();
+            let diff = relative_diff(&cached, &whole);
+            assert!(
+                diff < 1e-5,
+                "{file} c = {blend}: joined sets differ by {diff}"
+            );
+            let cut = predictor.represent(&selected, blend).unwrap();
+            let cut = predictor.decode(&cut, &targets).unwrap();
+            let whole = predictor
+                .predict(&obs(&[45, 0, 20]), &targets, blend)
+                .unwrap();
+            let diff = relative_diff(&cut, &whole);
+            assert!(
+                diff < 1e-5,
+                "{file} c = {blend}: a selection differs by {diff}"
+            );
+        }
+        let err = message(joined.select(&[]).unwrap_err());
+        assert!(err.contains("at least one context"), "{err}");
+        let err = message(joined.select(&[1, 5]).unwrap_err());
+        assert!(
+            err.contains("index 5") && err.contains("5 contexts"),
+            "{err}"
+        );
+        let err = message(predictor.represent(&joined, 1.5).unwrap_err());
+        assert!(err.contains("blend"), "{err}");
+    }
+    // Another kind's encodings are refused, to join or to represent.
+    let dmbn = Predictor::load(dir.join("dmbn-sim.dmbn")).unwrap();
+    let pte = Predictor::load(dir.join("pte-sim.dmbn")).unwrap();
+    let (d, p) = (
+        dmbn.encode_contexts(&obs(&[0])).unwrap(),
+        pte.encode_contexts(&obs(&[5])).unwrap(),
+    );
+    let err = message(d.cat(&p).unwrap_err());
+    assert!(
+        err.contains("dmbn model") && err.contains("pte model"),
+        "{err}"
+    );
+    let err = message(pte.represent(&d, 0.5).unwrap_err());
+    assert!(err.contains("encoded by a dmbn model"), "{err}");
+}
+
 fn fresh(kind: ModelKind, image_size: usize) -> Predictor {
     let device = Device::flex();
     let model = ModelConfig::new(kind)

@@ -329,6 +329,57 @@ fn encode_then_decode_in_chunks_matches_predict() {
     }
 }
 
+/// The worker's way in live mode: each observation encoded once (`encodeContexts`), the sets
+/// joined (`cat`) or cut (`select`), then `represent` and `decode`, gives what `predict` gives.
+#[wasm_bindgen_test]
+fn encoded_contexts_joined_and_selected_predict_as_predict() {
+    let (ep, p) = golden_prediction();
+    let m = ModelHandle::from_bytes(golden_prediction::MODEL).unwrap();
+    let (frames, joints, times) = observed(&ep);
+    let (n, blend) = (64 * 64 * 3, golden_prediction::BLEND);
+    let one = |i: usize| {
+        m.encode_contexts(
+            frames[i * n..(i + 1) * n].to_vec(),
+            joints[i * 7..(i + 1) * 7].to_vec(),
+            times[i..i + 1].to_vec(),
+        )
+        .unwrap()
+    };
+    // Encoded in the order 2, 0, 1, then put back in order.
+    let set = one(2).cat(&one(0)).unwrap().cat(&one(1)).unwrap();
+    assert_eq!(set.len(), 3);
+    let ordered = set.select(vec![1, 2, 0]).unwrap();
+    let encoding = m.represent(&ordered, blend).unwrap();
+    let q = m.decode(&encoding, ep.times()).unwrap();
+    for (what, part) in [
+        (
+            "joint mean",
+            Prediction::joint_mean as fn(&Prediction) -> Vec<f32>,
+        ),
+        ("joint σ", Prediction::joint_sigma),
+        ("image mean", Prediction::image_mean),
+        ("image σ", Prediction::image_sigma),
+    ] {
+        let diff = max_diff(&part(&q), &part(&p));
+        assert!(
+            diff < 1e-4,
+            "{what}: encoded contexts and predict differ by {diff}"
+        );
+    }
+    assert!(message(set.select(vec![3]).err().unwrap()).contains("out of range"));
+    assert!(message(m.represent(&set, 2.0).err().unwrap()).contains("blend"));
+    let other = ModelHandle::from_bytes(golden_prediction::MODEL).unwrap();
+    let theirs = other
+        .encode_contexts(
+            frames[..n].to_vec(),
+            joints[..7].to_vec(),
+            times[..1].to_vec(),
+        )
+        .unwrap();
+    assert!(message(m.represent(&theirs, blend).err().unwrap()).contains("another model"));
+    assert!(message(set.cat(&theirs).err().unwrap()).contains("another model"));
+}
+
 #[wasm_bindgen_test]
 fn scores_match_native_within_1e_4() {
     #[derive(serde::Deserialize)]

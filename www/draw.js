@@ -3,6 +3,7 @@
 import { follow, redrawErrors } from "./live.js";
 import { clampInt, observedSteps } from "./observations.js";
 import { drawJoints } from "./plot.js";
+import { firstDrawn } from "./prediction.js";
 import { state } from "./state.js";
 import { ui } from "./ui.js";
 import { clearFrame, drawTable, drawTimeline, rgbImage } from "./views.js";
@@ -16,7 +17,20 @@ export function show(k) {
   render();
 }
 
+/** Whether a draw waits for the next animation frame. */
+let drawSoon = false;
+
+/** Draws at the next animation frame: once, however many chunks arrive before it. */
+export function renderSoon() {
+  if (drawSoon) return;
+  drawSoon = true;
+  requestAnimationFrame(() => {
+    if (drawSoon) render();
+  });
+}
+
 export function render() {
+  drawSoon = false;
   const { shown, prediction: p, step } = state;
   if (!shown) {
     drawJoints(ui.plot, ui.plotCursor, null);
@@ -66,6 +80,7 @@ export function render() {
     step,
     prediction: p,
   });
+  if (p?.count) firstDrawn(p);
 }
 
 /** The forecast frame as a ghost over the true one: where the arm is going. */

@@ -82,6 +82,9 @@ export function setEpisode(ep, { action, seed, placed, ms, folder }) {
   return episode;
 }
 
+/** Numbers the shown sequences: the workers keep encoded observations per sequence (`source`). */
+let shownCount = 0;
+
 /** The sequence shown to the model under the chosen mode (the p permutation uses the episode seed). */
 export function buildShown() {
   const { episode } = state;
@@ -111,7 +114,7 @@ export function buildShown() {
     images.push(rgbImage(frames, size, k * px));
     sg.putImageData(images[k], k * size, 0);
   }
-  state.shown = { mode, len: ev.len, size, frames, joints: ev.joints(), times: ev.times(), images, sprite };
+  state.shown = { id: ++shownCount, mode, len: ev.len, size, frames, joints: ev.joints(), times: ev.times(), images, sprite };
   ev.free();
   return true;
 }

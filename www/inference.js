@@ -64,6 +64,11 @@ export class Inference {
     failFatal(err);
   }
 
+  /** Every worker drops the observations it keeps encoded (they are encoded again when next observed). */
+  forget() {
+    return Promise.all(this.workers.map((w) => this.send(w, { type: "forget" }).done));
+  }
+
   /** Stops request `id` (it resolves as cancelled). */
   cancel(id) {
     const entry = this.pending.get(id);
@@ -95,11 +100,14 @@ export class Inference {
   /**
    * Predicts `targets` with model `model` (an id) from the observations in chunks of `chunk`
    * steps spread over the workers; `onChunk({start, count, mean, sigma, maxSigma, jointMean, jointSigma})`
-   * gets each chunk (`start` a step index of `targets`) as it arrives. Returns {done, cancel}: `done` resolves
-   * with {type: "done" | "cancelled", encodeMs, decodeMs, workers} (the slowest worker's
-   * times) or rejects with the first failure.
+   * gets each chunk (`start` a step index of `targets`) as it arrives (with `firstAlone`, the
+   * first target comes alone first, sooner). With `source` (a name of the sequence) and `steps` (each observation's step),
+   * the workers keep the encoded steps and encode only those they lack. Returns {done, cancel}:
+   * `done` resolves with {type: "done" | "cancelled", encodeMs, decodeMs, encoded, workers} (the
+   * slowest worker's times, the most observations a worker encoded) or rejects with the first
+   * failure.
    */
-  predict({ model, frames, joints, times, targets, blend, chunk, delay }, onChunk) {
+  predict({ model, frames, joints, times, targets, blend, chunk, delay, source, steps, firstAlone = false }, onChunk) {
     const workers = this.workers.filter((w) => w.models.has(model));
     const chunks = Math.ceil(targets.length / chunk);
     const active = Math.max(1, Math.min(workers.length, chunks));
@@ -110,14 +118,14 @@ export class Inference {
       for (let c = w; c < chunks; c += active) mine.push(...targets.subarray(c * chunk, (c + 1) * chunk));
       const part = Float32Array.from(mine);
       const copies = [frames.slice(), joints.slice(), times.slice()];
-      const toGlobal = (start) => (w + (start / chunk) * active) * chunk;
+      // A worker's target i is in its chunk ⌊i / chunk⌋ (pieces never cross a chunk).
+      const toGlobal = (start) => (w + Math.floor(start / chunk) * active) * chunk + (start % chunk);
+      const msg = { type: "predict", model, frames: copies[0], joints: copies[1], times: copies[2], targets: part, blend, chunk, delay };
+      if (source != null && steps) Object.assign(msg, { source, steps: Array.from(steps) });
+      // Only the worker holding the first target decodes it alone.
+      msg.firstAlone = firstAlone && w === 0;
       requests.push(
-        this.send(
-          workers[w],
-          { type: "predict", model, frames: copies[0], joints: copies[1], times: copies[2], targets: part, blend, chunk, delay },
-          [...copies.map((a) => a.buffer), part.buffer],
-          (msg) => onChunk({ ...msg, start: toGlobal(msg.start) }),
-        ),
+        this.send(workers[w], msg, [...copies.map((a) => a.buffer), part.buffer], (m) => onChunk({ ...m, start: toGlobal(m.start) })),
       );
     }
     const cancel = () => requests.forEach((r) => this.cancel(r.id));
@@ -126,6 +134,7 @@ export class Inference {
         type: replies.some((r) => r.type === "cancelled") ? "cancelled" : "done",
         encodeMs: Math.max(...replies.map((r) => r.encodeMs ?? 0)),
         decodeMs: Math.max(...replies.map((r) => (r.ms ?? 0) - (r.encodeMs ?? 0))),
+        encoded: Math.max(...replies.map((r) => r.encoded ?? 0)),
         workers: active,
       }),
       (err) => {

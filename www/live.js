@@ -56,7 +56,7 @@ export function forecastNow(step = state.step) {
   document.body.dataset.seen = String(from);
   // Everything observed: the last forecast stays on screen.
   if (from >= shown.len) return render();
-  predict({ from, chunk: LIVE_CHUNK });
+  predict({ from, chunk: LIVE_CHUNK, firstAlone: true, keepEncoded: true });
 }
 
 /** The error curves of the episode on screen under the current rule and modalities. */
@@ -113,8 +113,9 @@ export function forecastDone(p) {
     // From the observation coming in: to the first chunk drawn, and to the whole forecast.
     first_chunk_ms: p.firstAt - p.asked,
     total_ms: performance.now() - p.asked,
-    // Of which the slowest worker's encoding of the observations.
+    // Of which the slowest worker's encoding of the observations it lacked (`encoded` of them).
     encode_ms: p.encodeMs,
+    encoded: p.encoded,
     joint_rmse: error.joint_rmse,
     image_mse: error.image_mse,
   });
@@ -163,10 +164,12 @@ export async function compareModels() {
         const n = shown.len - from;
         const mean = new Uint8Array(n * px);
         const jointMean = new Float32Array(n * JOINTS);
-        const { frames, joints, times } = observations(seenSteps(last));
+        const steps = seenSteps(last);
+        const { frames, joints, times } = observations(steps);
         const targets = Float32Array.from(shown.times.subarray(from));
         const chunk = Math.ceil(n / state.inference.count);
-        running = state.inference.predict({ model, frames, joints, times, targets, blend, chunk, delay: 0 }, (c) => {
+        const request = { model, frames, joints, times, targets, blend, chunk, delay: 0, source: shown.id, steps };
+        running = state.inference.predict(request, (c) => {
           mean.set(c.mean, c.start * px);
           jointMean.set(c.jointMean, c.start * JOINTS);
         });

@@ -32,7 +32,8 @@ async function main() {
     failFatal(err);
     return;
   }
-  window.dmbn = { timePrediction, predict: () => predict() };
+  // forgetEncodings: the workers encode every observation again (bench/page.mjs).
+  window.dmbn = { timePrediction, predict: () => predict(), forgetEncodings: () => state.inference.forget() };
   // The chosen model loads in the worker while the episode is simulated here.
   const modelReady = selectModel();
   // Simulating blocks this thread for a moment: first let the worker start (its start needs

@@ -1,7 +1,7 @@
 // Predicting the shown sequence: the request, its chunks as they come, cancelling, timings.
 
 import { BLENDS, CHUNK, CHUNK_DELAY, MODEL_NAMES, MODELS } from "./config.js";
-import { render } from "./draw.js";
+import { render, renderSoon } from "./draw.js";
 import { forecastDone, forecastNow } from "./live.js";
 import { loadModel, selectModel } from "./models.js";
 import { observedSteps } from "./observations.js";
@@ -48,10 +48,12 @@ export function observations(steps) {
 
 /**
  * Predicts the steps of the shown sequence from `from` on (every step by default; live mode's
- * forecast: the unseen rest) from the observed ones, drawing each chunk of `chunk` steps as it
- * comes.
+ * forecast: the unseen rest) from the observed ones, drawing the chunks of `chunk` steps as they
+ * come (at most once an animation frame). Live mode's options: `firstAlone`, the first step
+ * comes alone first; `keepEncoded`, the workers keep the observations encoded per step of the
+ * shown sequence and encode only the new ones.
  */
-export async function predict({ from = 0, chunk = CHUNK } = {}) {
+export async function predict({ from = 0, chunk = CHUNK, firstAlone = false, keepEncoded = false } = {}) {
   const { shown } = state;
   if (state.fatal || !state.episode || !shown) return;
   const steps = observedSteps();
@@ -76,6 +78,7 @@ export async function predict({ from = 0, chunk = CHUNK } = {}) {
     len,
     from,
     chunk,
+    firstAlone,
     size,
     observed: steps.length,
     done: new Uint8Array(len),
@@ -93,7 +96,11 @@ export async function predict({ from = 0, chunk = CHUNK } = {}) {
   state.prediction = p;
   setState("predicting");
   ui.predLabel.textContent = "predicting…";
-  if (!(await selectModel())) {
+  // A loaded model is asked at once: awaiting it would post the request only after the
+  // caller's drawing (a live forecast's latency). selectModel still updates the status line.
+  if (state.loadedModels.has(model)) {
+    selectModel();
+  } else if (!(await selectModel())) {
     if (state.prediction === p) state.prediction = null;
     return;
   }
@@ -102,7 +109,7 @@ export async function predict({ from = 0, chunk = CHUNK } = {}) {
   document.body.dataset.progress = "0";
   p.start = performance.now();
   const run = state.inference.predict(
-    { model, frames, joints, times, targets, blend: BLENDS[observe], chunk, delay: CHUNK_DELAY },
+    { model, frames, joints, times, targets, blend: BLENDS[observe], chunk, delay: CHUNK_DELAY, firstAlone, ...(keepEncoded && { source: shown.id, steps }) },
     (c) => receiveChunk(p, { ...c, start: from + c.start }),
   );
   p.cancel = run.cancel;
@@ -132,15 +139,18 @@ function receiveChunk(p, c) {
   p.done.fill(1, c.start, c.start + c.count);
   p.count += c.count;
   p.chunks.push(c.ms);
-  if (p.firstMs === undefined) {
-    p.firstAt = performance.now();
-    p.firstMs = p.firstAt - p.start;
-  }
   const steps = p.len - p.from;
   document.body.dataset.progress = String(p.count);
   ui.predLabel.textContent = `predicting… ${p.count} / ${steps}`;
   ui.timing.textContent = `${p.count} / ${steps} steps · ${Math.round(performance.now() - p.start)} ms`;
-  render();
+  renderSoon();
+}
+
+/** The prediction's first steps are drawn (draw.js): when, for its timings. */
+export function firstDrawn(p) {
+  if (p.firstAt !== undefined) return;
+  p.firstAt = performance.now();
+  p.firstMs = p.firstAt - p.start;
 }
 
 /** A prediction is complete: its timings, for the page and for automation. */
@@ -149,7 +159,10 @@ function finish(p, reply) {
   const len = p.len - from;
   p.complete = true;
   p.totalMs = performance.now() - p.start;
+  // Every chunk came before an animation frame drew one: the last ones are drawn below.
+  firstDrawn(p);
   p.encodeMs = reply.encodeMs;
+  p.encoded = reply.encoded;
   if (mode === "live") forecastDone(p);
   // A counter that automation can wait on: it changes with every finished prediction.
   document.body.dataset.predictions = String(Number(document.body.dataset.predictions ?? 0) + 1);
@@ -170,7 +183,7 @@ function finish(p, reply) {
   ui.predLabel.textContent = "";
   ui.timing.textContent =
     `${len} steps in ${Math.round(p.totalMs)} ms (${(p.totalMs / len).toFixed(1)} ms per frame) · ` +
-    `first ${Math.min(p.chunk, len)} after ${Math.round(p.firstMs)} ms · ${reply.workers} worker${reply.workers > 1 ? "s" : ""}`;
+    `first ${p.firstAlone ? 1 : Math.min(p.chunk, len)} after ${Math.round(p.firstMs)} ms · ${reply.workers} worker${reply.workers > 1 ? "s" : ""}`;
   ui.timing.title = `${MODEL_NAMES[model]}, mode ${mode}, ${observe}, ${p.observed} observed steps; encoding ${Math.round(reply.encodeMs)} ms`;
   render();
   settle();

@@ -1,22 +1,36 @@
 // Inference worker: loads the model files and runs their predictions (the attentive model, DMBN,
-// DMBN-PTE, DMBN-PTE + time warps) in WebAssembly, off the page's main thread. The observations are encoded once (Model.encode), then
-// the target times are decoded in chunks whose results go back as they come, typed arrays
-// transferred (not copied), so the page fills the predicted sequence in progressively.
+// DMBN-PTE, DMBN-PTE + time warps) in WebAssembly, off the page's main thread. The observations
+// are encoded once, then the target times are decoded in chunks whose results go back as they
+// come, typed arrays transferred (not copied), so the page fills the predicted sequence in
+// progressively.
+//
+// A predict that names its sequence (`source`) and the step of each observation (`steps`) goes
+// through the model's encoded steps (encoded_steps.js): each step is encoded once
+// (Model.encodeContexts) and kept (at most about 128 per model), the set observed is cut from
+// them and aggregated with the blend (Model.represent), so a live forecast encodes only its new
+// observation. Without them the observations are encoded together (Model.encode), kept nowhere.
 //
 // `model` is the page's model id (attn, dmbn, pte, pte-aug): it keys the loaded files; what a
 // file holds is `fileKind` (Model.kind: "attn", "dmbn" or "pte").
 // Messages in (all carry an `id`; replies echo it):
 //   {type: "init", module}                  the compiled WebAssembly.Module from the page
 //   {type: "load", model, url}              fetch and parse a model file (kept for later)
-//   {type: "predict", model, frames, joints, times, targets, blend, chunk, delay}
-//                                           a new predict cancels the running one
+//   {type: "predict", model, frames, joints, times, targets, blend, chunk, delay,
+//    source?, steps?, firstAlone?}          a new predict cancels the running one; `source`
+//                                           names the sequence, `steps` the step of each
+//                                           observation; `firstAlone`: the first target is
+//                                           decoded (and sent) alone, before its chunk's rest
 //   {type: "cancel", target}                stop prediction `target` if it is running
+//   {type: "forget"}                        drop every model's encoded steps
 // Messages out:
 //   {type: "inited", id}
 //   {type: "loaded", id, model, fileKind, imageSize, normalization, bytes, fetchMs, parseMs}
 //   {type: "chunk", id, start, count, mean, sigma, maxSigma, jointMean, jointSigma, ms}
-//   {type: "done", id, ms, encodeMs, steps}
+//   {type: "done", id, ms, encodeMs, encoded, steps}   encoded: the observations encoded
+//   {type: "forgotten", id}
 //   {type: "error", id, message}
+
+import { EncodedSteps } from "./encoded_steps.js";
 
 let wasm = null;
 let initWasm;
@@ -24,7 +38,7 @@ const wasmReady = new Promise((resolve) => {
   initWasm = resolve;
 });
 
-/** model id → {url, promise of {model, url, info}}: each file is fetched and parsed once. */
+/** model id → {url, promise of {model, url, info, encoded}}: each file is fetched and parsed once. */
 const models = new Map();
 /** Id of the prediction allowed to run; any other running loop stops at its next chunk. */
 let current = null;
@@ -50,6 +64,10 @@ self.onmessage = async (e) => {
         break;
       case "cancel":
         if (current === msg.target) current = null;
+        break;
+      case "forget":
+        await forget();
+        post({ type: "forgotten", id: msg.id });
         break;
       default:
         throw new Error(`unknown message ${JSON.stringify(msg.type)}`);
@@ -123,7 +141,13 @@ async function fetchModel(id, url) {
     fetchMs: t1 - t0,
     parseMs: performance.now() - t1,
   };
-  return { model, url, info };
+  return { model, url, info, encoded: new EncodedSteps(model) };
+}
+
+/** Drops the encoded steps of every model loaded. */
+async function forget() {
+  const loaded = await Promise.allSettled([...models.values()].map((m) => m.promise));
+  for (const r of loaded) if (r.status === "fulfilled") r.value.encoded.forget();
 }
 
 /** Lets queued messages (a newer prediction, a cancel) in between two chunks. */
@@ -131,34 +155,60 @@ function yieldToMessages(delay) {
   return new Promise((resolve) => setTimeout(resolve, delay || 0));
 }
 
+/** The pieces of `n` targets decoded one after another: chunks of `chunk`, the first target alone first with `firstAlone`. */
+function pieces(n, chunk, firstAlone) {
+  const out = [];
+  for (let start = 0; start < n; start += chunk) {
+    const end = Math.min(n, start + chunk);
+    if (start === 0 && firstAlone && end > 1) out.push([0, 1], [1, end]);
+    else out.push([start, end]);
+  }
+  return out;
+}
+
+/** What the decoders take for the message's observations, and how many were encoded for it. */
+function encode(msg, { model, encoded }) {
+  const { frames, joints, times, blend, source, steps } = msg;
+  if (source == null || !steps) return { encoding: model.encode(frames, joints, times, blend), count: times.length };
+  const { contexts, encoded: count } = encoded.contextsOf(source, steps, frames, joints, times);
+  try {
+    return { encoding: model.represent(contexts, blend), count };
+  } finally {
+    contexts.free();
+  }
+}
+
 async function predict(msg) {
-  const { id, frames, joints, times, targets, blend } = msg;
+  const { id, targets } = msg;
   const entry = models.get(msg.model);
   if (!entry) throw new Error(`the ${NAMES[msg.model] ?? msg.model} model is not loaded`);
-  const { model } = await entry.promise;
+  const loaded = await entry.promise;
   if (current !== id) return;
+  const { model } = loaded;
   const chunk = Math.max(1, msg.chunk | 0);
   const t0 = performance.now();
-  // The observations are encoded once; each chunk of targets is then only decoded.
-  const encoding = model.encode(frames, joints, times, blend);
+  // The observations are encoded once (only the new ones, with a source); each chunk of
+  // targets is then only decoded.
+  const { encoding, count } = encode(msg, loaded);
   const encodeMs = performance.now() - t0;
   try {
-    for (let start = 0; start < targets.length; start += chunk) {
+    for (const [start, end] of pieces(targets.length, chunk, msg.firstAlone)) {
       if (current !== id) return;
       const c0 = start === 0 ? t0 : performance.now();
       // A Prediction, as Model.predict returns: copied out (RGB bytes, σ per pixel), then freed.
-      const p = model.decode(encoding, targets.subarray(start, Math.min(targets.length, start + chunk)));
+      const p = model.decode(encoding, targets.subarray(start, end));
       const out = { start, count: p.len, mean: p.meanFrames(), sigma: p.pixelSigma(), maxSigma: p.maxImageSigma, jointMean: p.jointMean(), jointSigma: p.jointSigma() };
       p.free();
       out.ms = performance.now() - c0;
       post({ type: "chunk", id, ...out }, [out.mean.buffer, out.sigma.buffer, out.jointMean.buffer, out.jointSigma.buffer]);
-      await yieldToMessages(msg.delay);
+      // (No pause between the first target and the rest of its chunk.)
+      await yieldToMessages(start === 0 && end === 1 ? 0 : msg.delay);
     }
   } finally {
     encoding.free();
   }
   if (current === id) {
     current = null;
-    post({ type: "done", id, ms: performance.now() - t0, encodeMs, steps: targets.length });
+    post({ type: "done", id, ms: performance.now() - t0, encodeMs, encoded: count, steps: targets.length });
   }
 }

@@ -6,7 +6,9 @@ use super::decoder::{Decoder, DecoderConfig};
 use super::image_encoder::{ImageEncoder, ImageEncoderConfig};
 use super::joint_encoder::{JointEncoder, JointEncoderConfig};
 use super::prediction::per_target;
-use super::{BatchTensors, ContextEncodings, ModelConfig, ModelError, Prediction};
+use super::{
+    BatchTensors, ContextEncodings, EncodedContexts, ModelConfig, ModelError, ModelKind, Prediction,
+};
 
 /// The original Deep Modality Blending Network, "time as channel" (the paper's §3.1):
 ///
@@ -40,8 +42,9 @@ impl Dmbn {
         })
     }
 
-    /// Every context slot's encoding per modality, `[B, N, H]` each (padding included).
-    pub fn encode_contexts(&self, batch: &BatchTensors) -> ContextEncodings {
+    /// The batch's contexts encoded one by one, e_m `[B, N, H]` per modality (padding
+    /// included), with the observations.
+    pub fn encode_set(&self, batch: &BatchTensors) -> EncodedContexts {
         let [b, n, c, s, _] = batch.context_images.dims();
         let times = batch.context_times.clone();
         let plane = times
@@ -56,15 +59,21 @@ impl Dmbn {
             vec![times.unsqueeze_dim::<3>(2), batch.context_joints.clone()],
             2,
         );
-        ContextEncodings {
+        let encodings = ContextEncodings {
             image: image.reshape([b, n, h]),
             joint: self.joint_encoder.forward(joints),
-        }
+        };
+        EncodedContexts::new(ModelKind::Dmbn, encodings, batch)
     }
 
-    /// The blended representation r, `[B, H]`.
+    /// The blended representation r, `[B, H]`, of encoded contexts with `[B]` coefficients c.
+    pub fn represent(&self, contexts: &EncodedContexts, c: Tensor<1>) -> Tensor<2> {
+        contexts.blended_mean(c)
+    }
+
+    /// The blended representation r of the batch's contexts, `[B, H]`.
     pub fn encode(&self, batch: &BatchTensors) -> Tensor<2> {
-        self.encode_contexts(batch).represent(batch)
+        self.represent(&self.encode_set(batch), batch.blend.clone())
     }
 
     /// The decoder input at `[B, M]` target times, `[B, M, H + 1]`: `[r, t_target]`.

@@ -12,7 +12,8 @@ use super::joint_encoder::JointEncoder;
 use super::time_embedding::{TimeEmbedding, TimeEmbeddingConfig};
 use super::time_projection::TimeProjection;
 use super::{
-    AttentiveContexts, BatchTensors, ContextEncodings, ModelConfig, ModelError, Prediction, Start,
+    AttentiveContexts, BatchTensors, EncodedContexts, ModelConfig, ModelError, ModelKind,
+    Prediction, Start,
 };
 
 /// The attentive model (`attn`): DMBN-PTE's context encodings, aggregated per target by
@@ -97,30 +98,40 @@ impl DmbnAttn {
 }
 
 impl DmbnAttn {
-    /// Every context slot's z per modality, `[B, N, H]` each (padding included).
-    pub fn encode_contexts(&self, batch: &BatchTensors) -> ContextEncodings {
-        pte_context_encodings(
+    /// The batch's contexts encoded one by one, z_m `[B, N, H]` per modality (padding
+    /// included), with the observations.
+    pub fn encode_set(&self, batch: &BatchTensors) -> EncodedContexts {
+        let encodings = pte_context_encodings(
             &self.image_encoder,
             &self.joint_encoder,
             &self.time,
             [&self.image_projection, &self.joint_projection],
             batch,
-        )
+        );
+        EncodedContexts::new(ModelKind::Attn, encodings, batch)
     }
 
-    /// The contexts every target attends to: their encodings, keys and padding.
-    pub fn encode(&self, batch: &BatchTensors) -> AttentiveContexts {
-        let encodings = self.encode_contexts(batch);
+    /// The contexts every target attends to, with `[B]` coefficients c: their encodings,
+    /// keys (the embedded times: cheap, so made here rather than kept) and padding. Attention
+    /// and the interpolated start read the whole set at each target, in
+    /// [`DmbnAttn::condition`].
+    pub fn represent(&self, contexts: &EncodedContexts, c: Tensor<1>) -> AttentiveContexts {
+        let encodings = contexts.encodings();
         AttentiveContexts {
-            times: batch.context_times.clone(),
-            frames: batch.context_images.clone(),
-            joints: batch.context_joints.clone(),
-            image: encodings.image,
-            joint: encodings.joint,
-            keys: self.time_embedding.forward(batch.context_times.clone()),
-            padding: batch.context_mask.clone().equal_elem(0.0),
-            blend: batch.blend.clone(),
+            times: contexts.times().clone(),
+            frames: contexts.frames().clone(),
+            joints: contexts.joints().clone(),
+            image: encodings.image.clone(),
+            joint: encodings.joint.clone(),
+            keys: self.time_embedding.forward(contexts.times().clone()),
+            padding: contexts.mask().clone().equal_elem(0.0),
+            blend: c,
         }
+    }
+
+    /// The contexts every target attends to, of the batch's contexts.
+    pub fn encode(&self, batch: &BatchTensors) -> AttentiveContexts {
+        self.represent(&self.encode_set(batch), batch.blend.clone())
     }
 
     /// The decoder input at `[B, M]` target times, `[B, M, H]` (per target, attention over

@@ -8,7 +8,9 @@ use super::image_encoder::{ImageEncoder, ImageEncoderConfig};
 use super::joint_encoder::{JointEncoder, JointEncoderConfig};
 use super::prediction::per_target;
 use super::time_projection::{TimeProjection, TimeProjectionConfig};
-use super::{BatchTensors, ContextEncodings, ModelConfig, ModelError, Prediction};
+use super::{
+    BatchTensors, ContextEncodings, EncodedContexts, ModelConfig, ModelError, ModelKind, Prediction,
+};
 
 /// DMBN with Positional Time Encoding, "time as context" (the paper's §3.2):
 ///
@@ -56,20 +58,28 @@ impl DmbnPte {
         })
     }
 
-    /// Every context slot's z per modality, `[B, N, H]` each (padding included).
-    pub fn encode_contexts(&self, batch: &BatchTensors) -> ContextEncodings {
-        pte_context_encodings(
+    /// The batch's contexts encoded one by one, z_m `[B, N, H]` per modality (padding
+    /// included), with the observations.
+    pub fn encode_set(&self, batch: &BatchTensors) -> EncodedContexts {
+        let encodings = pte_context_encodings(
             &self.image_encoder,
             &self.joint_encoder,
             &self.time,
             [&self.image_projection, &self.joint_projection],
             batch,
-        )
+        );
+        EncodedContexts::new(ModelKind::Pte, encodings, batch)
     }
 
-    /// The blended representation r, `[B, H]`, before any target time is subtracted.
+    /// The blended representation r, `[B, H]`, of encoded contexts with `[B]` coefficients c,
+    /// before any target time is subtracted.
+    pub fn represent(&self, contexts: &EncodedContexts, c: Tensor<1>) -> Tensor<2> {
+        contexts.blended_mean(c)
+    }
+
+    /// The blended representation r of the batch's contexts, `[B, H]`.
     pub fn encode(&self, batch: &BatchTensors) -> Tensor<2> {
-        self.encode_contexts(batch).represent(batch)
+        self.represent(&self.encode_set(batch), batch.blend.clone())
     }
 
     /// The decoder input at `[B, M]` target times, `[B, M, H]`: r_target = r − P(t_target).

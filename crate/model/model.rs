@@ -6,8 +6,8 @@ use super::dmbn_attn::DmbnAttn;
 use super::dmbn_pte::DmbnPte;
 use super::loss::{gaussian_loss, Loss};
 use super::{
-    BatchTensors, ContextEncodings, Decoder, ImageEncoder, ModelConfig, ModelError, ModelKind,
-    Prediction, Representation, Start,
+    BatchTensors, ContextEncodings, Decoder, EncodedContexts, ImageEncoder, ModelConfig,
+    ModelError, ModelKind, Prediction, Representation, Start,
 };
 
 /// One of the three networks.
@@ -95,24 +95,65 @@ impl Model {
     /// Every context slot's encoding per modality, `[B, N, H]` each: the input of the
     /// paper's time-regression probe.
     pub fn encode_contexts(&self, batch: &BatchTensors) -> Result<ContextEncodings, ModelError> {
+        Ok(self.encode_set(batch)?.into_encodings())
+    }
+
+    /// The batch's contexts encoded one by one, before they are aggregated: sets can be joined
+    /// and cut (see [`EncodedContexts`]), then aggregated with [`Model::represent`].
+    pub fn encode_set(&self, batch: &BatchTensors) -> Result<EncodedContexts, ModelError> {
         self.check(batch)?;
         Ok(match &self.network {
-            Network::Dmbn(net) => net.encode_contexts(batch),
-            Network::Pte(net) => net.encode_contexts(batch),
-            Network::Attn(net) => net.encode_contexts(batch),
+            Network::Dmbn(net) => net.encode_set(batch),
+            Network::Pte(net) => net.encode_set(batch),
+            Network::Attn(net) => net.encode_set(batch),
         })
     }
 
     /// What the decoders are conditioned on (the blended mean representation, or the
-    /// contexts to attend to); decode it at as many target times as needed with
-    /// [`Model::decode`].
-    pub fn encode(&self, batch: &BatchTensors) -> Result<Representation, ModelError> {
-        self.check(batch)?;
+    /// contexts to attend to) for encoded contexts and `[B]` blending coefficients c; decode
+    /// it at as many target times as needed with [`Model::decode`]. Fails on contexts another
+    /// kind or size of model encoded, or a c per sequence missing.
+    pub fn represent(
+        &self,
+        contexts: &EncodedContexts,
+        c: Tensor<1>,
+    ) -> Result<Representation, ModelError> {
+        let config = &self.config;
+        if contexts.kind() != config.kind
+            || contexts.hidden() != config.hidden
+            || contexts.image_size() != config.image_size
+        {
+            return Err(ModelError::Contexts(format!(
+                "these were encoded by a {} model (H = {}, {}x{} frames), not by this {} model (H = {}, {}x{}): encode with the model that represents",
+                contexts.kind(),
+                contexts.hidden(),
+                contexts.image_size(),
+                contexts.image_size(),
+                config.kind,
+                config.hidden,
+                config.image_size,
+                config.image_size
+            )));
+        }
+        if c.dims() != [contexts.batch()] {
+            return Err(ModelError::Length {
+                field: "blend",
+                expected: contexts.batch(),
+                found: c.shape().num_elements(),
+                shape: format!("[B={}]", contexts.batch()),
+            });
+        }
         Ok(match &self.network {
-            Network::Dmbn(net) => Representation::Mean(net.encode(batch)),
-            Network::Pte(net) => Representation::Mean(net.encode(batch)),
-            Network::Attn(net) => Representation::Attentive(net.encode(batch)),
+            Network::Dmbn(net) => Representation::Mean(net.represent(contexts, c)),
+            Network::Pte(net) => Representation::Mean(net.represent(contexts, c)),
+            Network::Attn(net) => Representation::Attentive(net.represent(contexts, c)),
         })
+    }
+
+    /// What the decoders are conditioned on for the batch's contexts: [`Model::encode_set`],
+    /// then [`Model::represent`] with the batch's blending coefficients.
+    pub fn encode(&self, batch: &BatchTensors) -> Result<Representation, ModelError> {
+        self.represent(&self.encode_set(batch)?, batch.blend.clone())
     }
 
     /// The prediction at `[B, M]` target times (B as the representation, M >= 1).

@@ -1,7 +1,5 @@
 use burn::tensor::{Bool, Tensor};
 
-use super::{blend, masked_mean, BatchTensors};
-
 /// What the decoders are conditioned on, computed once per context set so that any number of
 /// target times can be decoded from it. Encode once, decode many.
 #[derive(Debug, Clone)]
@@ -55,7 +53,7 @@ pub struct AttentiveContexts {
 }
 
 /// The per-context encodings before the set average, per modality: what the paper's
-/// time-regression probe reads. For DMBN they are e_m(t, x); for DMBN-PTE
+/// time-regression probe reads, and what [`EncodedContexts`](super::EncodedContexts) keeps. For DMBN they are e_m(t, x); for DMBN-PTE
 /// z = g_m(e_m(x) + P(t)). Padding slots are included (mask them out).
 #[derive(Debug, Clone)]
 pub struct ContextEncodings {
@@ -63,16 +61,6 @@ pub struct ContextEncodings {
     pub image: Tensor<3>,
     /// `[B, N, H]`: joint context encodings.
     pub joint: Tensor<3>,
-}
-
-impl ContextEncodings {
-    /// The set representation of both networks: the masked mean over contexts per modality,
-    /// blended with each sequence's coefficient, r = c·r_image + (1 − c)·r_joint.
-    pub fn represent(self, batch: &BatchTensors) -> Tensor<2> {
-        let r_image = masked_mean(self.image, batch.context_mask.clone());
-        let r_joint = masked_mean(self.joint, batch.context_mask.clone());
-        blend(r_image, r_joint, batch.blend.clone())
-    }
 }
 
 /// A diagonal Gaussian over each target's frame and joints.

@@ -3,7 +3,9 @@ use burn::tensor::{Device, Tensor, TensorData};
 use super::{Observations, SequencePrediction};
 use crate::augment::Batch;
 use crate::data::JOINTS;
-use crate::model::{self, tensors, Model, ModelError, ModelKind, Normalization, Representation};
+use crate::model::{
+    self, tensors, EncodedContexts, Model, ModelError, ModelKind, Normalization, Representation,
+};
 
 /// A trained model ready for inference on the CPU (flex backend): encode observations once,
 /// decode as many target times as needed. Natively and in wasm alike.
@@ -69,21 +71,43 @@ impl Predictor {
 
     /// What the decoders condition on (see [`Representation`]) for `observations` with
     /// blending coefficient `blend`
-    /// (1 = images only, 0 = joints only).
+    /// (1 = images only, 0 = joints only): [`Predictor::encode_contexts`], then
+    /// [`Predictor::represent`].
     pub fn encode(
         &self,
         observations: &Observations,
         blend: f32,
     ) -> Result<Representation, ModelError> {
-        if !(0.0..=1.0).contains(&blend) {
-            return Err(ModelError::observation(
-                "blend",
-                format!("is {blend}: expected a coefficient in [0, 1] (1 = images only, 0 = joints only)"),
-            ));
-        }
+        check_blend(blend)?;
+        self.represent(&self.encode_contexts(observations)?, blend)
+    }
+
+    /// The observations encoded one by one, not yet aggregated: sets encoded apart can be
+    /// joined ([`EncodedContexts::cat`]) or cut ([`EncodedContexts::select`]), so that a new
+    /// observation is encoded alone and the others are kept.
+    pub fn encode_contexts(
+        &self,
+        observations: &Observations,
+    ) -> Result<EncodedContexts, ModelError> {
         observations.check(self.model.image_size())?;
-        let batch = self.batch(observations, blend);
-        self.model.encode(&tensors(&batch, &self.device)?)
+        let batch = self.batch(observations);
+        self.model.encode_set(&tensors(&batch, &self.device)?)
+    }
+
+    /// What the decoders condition on for encoded observations with blending coefficient
+    /// `blend` (1 = images only, 0 = joints only), as [`Predictor::encode`] gives it for the
+    /// same observations.
+    pub fn represent(
+        &self,
+        contexts: &EncodedContexts,
+        blend: f32,
+    ) -> Result<Representation, ModelError> {
+        check_blend(blend)?;
+        let c = Tensor::<1>::from_data(
+            TensorData::new(vec![blend; contexts.batch()], [contexts.batch()]),
+            &self.device,
+        );
+        self.model.represent(contexts, c)
     }
 
     /// The prediction at `target_times` (finite phases; any number, decoded in chunks of
@@ -130,8 +154,9 @@ impl Predictor {
     }
 
     /// The one-sequence batch of checked `observations` (no targets: only times are known
-    /// at inference, and they are decoded separately).
-    fn batch(&self, observations: &Observations, blend: f32) -> Batch {
+    /// at inference, and they are decoded separately; its blend is left at 0, as the blend
+    /// is applied when the encodings are represented).
+    fn batch(&self, observations: &Observations) -> Batch {
         let (n, s) = (observations.len(), observations.image_size);
         let mut batch = Batch::contexts_only(1, n, 1, s);
         let rows = observations.joints.chunks_exact(JOINTS);
@@ -140,7 +165,20 @@ impl Predictor {
             let row: [f32; JOINTS] = std::array::from_fn(|j| row[j]);
             batch.set_context(0, i, frame, self.normalization.normalize(&row), time);
         }
-        batch.blend[0] = blend;
         batch
+    }
+}
+
+/// Fails unless `blend` is a coefficient in [0, 1].
+fn check_blend(blend: f32) -> Result<(), ModelError> {
+    if (0.0..=1.0).contains(&blend) {
+        Ok(())
+    } else {
+        Err(ModelError::observation(
+            "blend",
+            format!(
+                "is {blend}: expected a coefficient in [0, 1] (1 = images only, 0 = joints only)"
+            ),
+        ))
     }
 }

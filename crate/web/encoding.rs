@@ -2,7 +2,7 @@ use wasm_bindgen::prelude::*;
 
 use crate::model::Representation;
 
-/// Observations encoded by `Model.encode`: what the decoders are conditioned on (the blended
+/// Observations encoded by `Model.encode` (or `Model.represent`): what the decoders are conditioned on (the blended
 /// representation r, or the contexts the attentive model attends to), with the model that
 /// made it (an id), so that it is only ever decoded by that model.
 #[wasm_bindgen]

@@ -1,6 +1,7 @@
 //! JavaScript bindings (wasm32 only): thin wrappers that convert JS values to the Rust types of
 //! [`crate::sim`] and [`crate::predict`] and back. No simulation logic lives here; bad arguments become JS exceptions.
 mod action;
+mod contexts;
 mod encoding;
 mod episode;
 mod eval_episode;
@@ -12,6 +13,7 @@ mod region;
 mod seed;
 mod simulator;
 
+pub use contexts::Contexts;
 pub use encoding::Encoding;
 pub use episode::{run_episode, Episode};
 pub use eval_episode::EvalEpisode;

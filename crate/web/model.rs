@@ -4,17 +4,20 @@ use wasm_bindgen::prelude::*;
 
 use serde::Serialize;
 
+use super::contexts::Contexts;
 use super::encoding::Encoding;
 use super::Episode;
 use crate::predict::{Observations, Predictor, SequencePrediction};
 use crate::quality::{score_sequence, Quality, Scenario};
 
-/// Tells models apart, so an encoding is only ever decoded by the model that made it.
+/// Tells models apart, so an encoding is only ever decoded (and encoded contexts only
+/// represented) by the model that made it.
 static NEXT_ID: AtomicU32 = AtomicU32::new(1);
 
 /// A trained DMBN, DMBN-PTE or attentive model for inference in the browser: `Model.fromBytes(bytes)`, then
-/// `predict(...)` in one call, or, as the demo page's worker does, `encode(...)` the
-/// observations once and `decode(...)` target times in as many chunks as wanted. Wraps
+/// `predict(...)` in one call, or `encode(...)` the observations once and `decode(...)` target
+/// times in as many chunks as wanted; or, as the demo page's worker does, `encodeContexts(...)`
+/// each observation once, `represent(...)` the set observed, and `decode(...)`. Wraps
 /// [`Predictor`], the same code the native `dmbn predict` runs.
 #[wasm_bindgen(js_name = Model)]
 pub struct ModelHandle {
@@ -83,6 +86,37 @@ impl ModelHandle {
         let observations = self.observations(frames, joints, times);
         Ok(Encoding {
             inner: self.inner.encode(&observations, blend)?,
+            model: self.id,
+        })
+    }
+
+    /// Encodes N observed steps one by one, with the arguments of `encode` (without the blend),
+    /// for `represent`: the `Contexts` can be joined and cut first. Throws on bad input.
+    #[wasm_bindgen(js_name = encodeContexts)]
+    pub fn encode_contexts(
+        &self,
+        frames: Vec<u8>,
+        joints: Vec<f32>,
+        times: Vec<f32>,
+    ) -> Result<Contexts, JsError> {
+        let observations = self.observations(frames, joints, times);
+        Ok(Contexts {
+            inner: self.inner.encode_contexts(&observations)?,
+            model: self.id,
+        })
+    }
+
+    /// The `Encoding` of encoded `contexts` with `blend` in [0, 1], for `decode`: what `encode`
+    /// gives for the same observations. Throws when `contexts` come from another model or the
+    /// blend is out of range.
+    pub fn represent(&self, contexts: &Contexts, blend: f32) -> Result<Encoding, JsError> {
+        if contexts.model != self.id {
+            return Err(JsError::new(
+                "these contexts were encoded by another model: encode the observations with this one",
+            ));
+        }
+        Ok(Encoding {
+            inner: self.inner.represent(&contexts.inner, blend)?,
             model: self.id,
         })
     }

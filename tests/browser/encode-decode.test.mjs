@@ -1,11 +1,13 @@
-// The page's worker API (Model.encode once, Model.decode in chunks) on the web package
-// itself, under Node: it must give what Model.predict gives, and refuse bad input with a JS
-// Error. Runs with the browser tests (`node --test tests/browser/`), on pkg/ and the shipped weights.
+// The page's worker API (Model.encode once, Model.decode in chunks; the observations kept
+// encoded per step, www/encoded_steps.js) on the web package itself, under Node: it must give
+// what Model.predict gives, and refuse bad input with a JS Error. Runs with the browser tests (`node --test tests/browser/`), on pkg/ and the shipped weights.
 import assert from "node:assert/strict";
 import { existsSync, readFileSync } from "node:fs";
 import { dirname, join } from "node:path";
 import { before, describe, test } from "node:test";
 import { fileURLToPath, pathToFileURL } from "node:url";
+
+import { EncodedSteps } from "../../www/encoded_steps.js";
 
 const ROOT = join(dirname(fileURLToPath(import.meta.url)), "..", "..");
 const S = 64;
@@ -90,6 +92,47 @@ describe("Model.encode / Model.decode (the page's worker API)", () => {
       model.free();
     });
   }
+
+  test("kept encodings (EncodedSteps) predict as Model.predict, encoding each step once", () => {
+    for (const file of ["attn-sim.dmbn", "dmbn-sim.dmbn"]) {
+      const model = wasm.Model.fromBytes(weights(file));
+      const kept = new EncodedSteps(model);
+      const targets = episode.times().subarray(30, 40);
+      const forecast = (source, steps) => {
+        const { frames, joints, times } = observe(steps);
+        const { contexts, encoded } = kept.contextsOf(source, steps, frames, joints, times);
+        const encoding = model.represent(contexts, 0.5);
+        assert.equal(contexts.len, steps.length);
+        const p = model.decode(encoding, targets);
+        const whole = model.predict(frames, joints, times, targets, 0.5);
+        close(p.jointMean(), whole.jointMean(), 1e-4, `${file} ${steps}: joint mean`);
+        close(p.imageMean(), whole.imageMean(), 1e-4, `${file} ${steps}: image mean`);
+        for (const o of [contexts, encoding, p, whole]) o.free();
+        return encoded;
+      };
+      assert.equal(forecast("a", [0, 10]), 2);
+      assert.equal(forecast("a", [0, 10, 20]), 1, "only the new step is encoded");
+      assert.equal(forecast("a", [20, 0]), 0, "any subset, in any order");
+      assert.equal(forecast("b", [0, 10]), 2, "another sequence: encoded again");
+      kept.forget();
+      assert.equal(forecast("b", [0]), 1);
+      // Past the limit only the steps observed now stay.
+      const small = new EncodedSteps(model, 3);
+      const add = (steps) => {
+        const { frames, joints, times } = observe(steps);
+        const { contexts, encoded } = small.contextsOf("a", steps, frames, joints, times);
+        contexts.free();
+        return encoded;
+      };
+      assert.equal(add([0, 10, 20]), 3);
+      assert.equal(add([20, 30]), 1);
+      assert.deepEqual(small.steps, [20, 30]);
+      assert.equal(add([20, 30, 40]), 1);
+      assert.deepEqual(small.steps, [20, 30, 40]);
+      small.forget();
+      model.free();
+    }
+  });
 
   test("bad input throws a JS Error", () => {
     const dmbn = wasm.Model.fromBytes(weights("dmbn-sim.dmbn"));
