@@ -7,8 +7,9 @@
 #   bash docs/reproduce.sh sim  PATH/TO/sim2000    # `dmbn simulate --out PATH --sequences 2000 --seed 1000`
 #
 # By default it uses the shipped weights (assets/models/{dmbn,pte,pte-aug,attn}-{2020,sim}.dmbn,
-# those that exist). With TRAIN=1 it first trains them into $OUT/runs with the README's recipe
-# (hours on 2 cores) and uses each run's best.dmbn (the best validation quality). Results go to $OUT (default out/results-<set>): probe-*/probe.md, eval/<model>/<mode>/
+# those that exist). With TRAIN=1 it first trains them into $OUT/runs with the commands the
+# shipped weights were trained with (hours on 2 cores) and uses what was shipped of each run.
+# Results go to $OUT (default out/results-<set>): probe-*/probe.md, eval/<model>/<mode>/
 # <id>-<action>/{figure.png,eval.json} and tpf.md, the mean scores per model and mode.
 set -euo pipefail
 
@@ -44,19 +45,51 @@ for m in dmbn pte pte-aug attn; do
   fi
 done
 
+# One training stage into $out/runs/NAME; --resume continues an interrupted one, a finished
+# one is left as it is.
+stage() {
+  local name=$1; shift
+  if [ -f "$out/runs/$name/checkpoint/state.json" ]; then
+    "$bin/train" --resume --data "$data" --out "$out/runs/$name"
+    return
+  fi
+  "$bin/train" --data "$data" --out "$out/runs/$name" --joint-weight 1 --contexts-in-targets \
+    --targets-per-sequence 8 --joint-targets 32 --single-modality 0.3 --prefix-contexts 0.3 \
+    --val-every "$every" --checkpoint-every "$every" --val-fraction "$fraction" --half \
+    --schedule cosine "$@"
+}
+
+# The shipped weights' recipe (docs/results.md, "How the shipped weights were trained"): the
+# first 3,000 steps at lr 1e-3, then, on the simulator, the paper's networks trained longer
+# from the previous stage's model.dmbn at lr 5e-4.
 if [ "${TRAIN:-0}" = 1 ]; then
+  first=(--steps "$steps" --seed 1 --lr 1e-3)
+  longer=(--lr 5e-4 --beta-nll 1)
   for m in "${models[@]}"; do
-    kind=${m%-aug}
-    extra=(--single-modality 0.3 --prefix-contexts 0.3)
-    [ "$m" = pte-aug ] && extra+=(--augment)
-    # --resume continues an interrupted run; a finished one is left as it is.
-    resume=()
-    [ -f "$out/runs/$m/checkpoint/state.json" ] && resume=(--resume)
-    "$bin/train" --data "$data" --model "$kind" "${extra[@]}" --out "$out/runs/$m" \
-      --steps "$steps" --seed 1 --lr 1e-3 --schedule cosine --joint-weight 1 \
-      --contexts-in-targets --targets-per-sequence 8 --joint-targets 32 --beta-nll 1 --val-every "$every" \
-      --checkpoint-every "$every" --val-fraction "$fraction" --half "${resume[@]}"
-    file[$m]=$out/runs/$m/best.dmbn
+    case $set_name/$m in
+      sim/attn) stage attn "${first[@]}" --model attn --beta-nll 1
+        file[$m]=$out/runs/attn/best.dmbn ;;
+      sim/pte) stage pte "${first[@]}" --model pte --beta-nll 1
+        stage pte-2 "${longer[@]}" --init "$out/runs/pte/model.dmbn" --steps 3000 --seed 2
+        file[$m]=$out/runs/pte-2/model.dmbn ;;
+      sim/dmbn) stage dmbn "${first[@]}" --model dmbn --beta-nll 1
+        stage dmbn-2 "${longer[@]}" --init "$out/runs/dmbn/model.dmbn" --steps 2000 --seed 2
+        stage dmbn-3 "${longer[@]}" --init "$out/runs/dmbn-2/model.dmbn" --steps 3000 --seed 3
+        stage dmbn-4 "${longer[@]}" --init "$out/runs/dmbn-3/model.dmbn" --steps 3000 --seed 4
+        file[$m]=$out/runs/dmbn-4/model.dmbn ;;
+      sim/pte-aug) stage pte-aug "${first[@]}" --model pte --augment
+        stage pte-aug-2 "${longer[@]}" --init "$out/runs/pte-aug/model.dmbn" --augment --steps 2000 --seed 2
+        stage pte-aug-3 "${longer[@]}" --init "$out/runs/pte-aug-2/model.dmbn" --augment --steps 2000 --seed 3
+        file[$m]=$out/runs/pte-aug-3/model.dmbn ;;
+      2020/pte) stage pte "${first[@]}" --model pte
+        file[$m]=$out/runs/pte/model.dmbn ;;
+      2020/dmbn) stage dmbn "${first[@]}" --model dmbn --beta-nll 1
+        file[$m]=$out/runs/dmbn/model.dmbn ;;
+      2020/pte-aug) stage pte-aug "${first[@]}" --model pte --augment --beta-nll 1
+        file[$m]=$out/runs/pte-aug/model.dmbn ;;
+      2020/attn) stage attn "${first[@]}" --model attn --beta-nll 1
+        file[$m]=$out/runs/attn/best.dmbn ;;
+    esac
   done
 fi
 
