@@ -120,7 +120,8 @@ struct Args {
     #[arg(long)]
     augment: bool,
 
-    /// Store the final model's weights in f16.
+    /// Store the final model's weights in f16 (pass it again with --resume: the checkpoint
+    /// does not keep it).
     #[arg(long)]
     half: bool,
 }
