@@ -4,10 +4,11 @@
 export const IMAGE_SIZE = 64;
 /** Playback: one recorded step is 3 physics substeps of 1/60 s, so 20 steps/s is real time. */
 export const STEPS_PER_SECOND = 20;
-/** Target times per predict call: the sequence fills in by this many steps at a time. */
+/**
+ * Target times per predict call: the sequence fills in by this many steps at a time (live mode
+ * too: its first step comes alone, and smaller chunks only add round trips).
+ */
 export const CHUNK = 10;
-/** Live mode: a forecast's first frames come sooner in smaller chunks. */
-export const LIVE_CHUNK = 4;
 export const BLENDS = { images: 1, joints: 0, both: 0.5 };
 /**
  * The models the page offers, by id (the `#model` option values, the `model=` URL state, and

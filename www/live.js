@@ -2,7 +2,7 @@
 // observations, and the unseen rest of the action is forecast again each time they change; each
 // finished forecast's error joins the live error plot.
 
-import { BLENDS, LIVE_CHUNK, MODEL_NAMES } from "./config.js";
+import { BLENDS, CHUNK, MODEL_NAMES } from "./config.js";
 import { render } from "./draw.js";
 import { drawErrors } from "./error_plot.js";
 import { loadModel } from "./models.js";
@@ -56,7 +56,7 @@ export function forecastNow(step = state.step) {
   document.body.dataset.seen = String(from);
   // Everything observed: the last forecast stays on screen.
   if (from >= shown.len) return render();
-  predict({ from, chunk: LIVE_CHUNK, firstAlone: true, keepEncoded: true });
+  predict({ from, chunk: CHUNK, firstAlone: true, keepEncoded: true });
 }
 
 /** The error curves of the episode on screen under the current rule and modalities. */
