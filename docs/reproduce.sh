@@ -77,10 +77,9 @@ if [ "${TRAIN:-0}" = 1 ]; then
         stage dmbn-3 "${longer[@]}" --init "$out/runs/dmbn-2/model.dmbn" --steps 3000 --seed 3
         stage dmbn-4 "${longer[@]}" --init "$out/runs/dmbn-3/model.dmbn" --steps 3000 --seed 4
         file[$m]=$out/runs/dmbn-4/model.dmbn ;;
-      sim/pte-aug) stage pte-aug "${first[@]}" --model pte --augment
-        stage pte-aug-2 "${longer[@]}" --init "$out/runs/pte-aug/model.dmbn" --augment --steps 2000 --seed 2
-        stage pte-aug-3 "${longer[@]}" --init "$out/runs/pte-aug-2/model.dmbn" --augment --steps 2000 --seed 3
-        file[$m]=$out/runs/pte-aug-3/model.dmbn ;;
+      # DMBN-PTE's trained file, then the time warps (run after sim/pte: models are in that order).
+      sim/pte-aug) stage pte-aug "${longer[@]}" --init "$out/runs/pte-2/model.dmbn" --augment --steps 2000 --seed 5
+        file[$m]=$out/runs/pte-aug/model.dmbn ;;
       2020/pte) stage pte "${first[@]}" --model pte
         file[$m]=$out/runs/pte/model.dmbn ;;
       2020/dmbn) stage dmbn "${first[@]}" --model dmbn --beta-nll 1

@@ -10,7 +10,7 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::Path;
 use std::sync::Mutex;
 
-use dmbn::model::{ModelConfig, ModelKind};
+use dmbn::model::{read_header, ModelConfig, ModelKind, WeightDType};
 use dmbn::predict::{Observations, Predictor};
 use dmbn::sim::{episode, Action};
 use dmbn::train::{Checkpoint, Metrics, Schedule, TrainConfig, TrainError, Trainer};
@@ -65,7 +65,7 @@ fn loss_falls(models: &[ModelKind]) {
         config.val_every = 30;
         config.checkpoint_every = 30;
         let mut trainer = new_trainer(&data, &out, config).unwrap();
-        let path = trainer.run(false, |_| {}).unwrap();
+        let path = trainer.run(|_| {}).unwrap();
         assert!(path.exists());
         let m = metrics(&out);
         assert_eq!(m.len(), 30);
@@ -115,17 +115,17 @@ fn resume_reproduces_the_uninterrupted_run() {
     let whole = tmp.path().join("whole");
     new_trainer(&data, &whole, small(ModelKind::Pte, 6))
         .unwrap()
-        .run(false, |_| {})
+        .run(|_| {})
         .unwrap();
 
     let parts = tmp.path().join("parts");
     new_trainer(&data, &parts, small(ModelKind::Pte, 4))
         .unwrap()
-        .run(false, |_| {})
+        .run(|_| {})
         .unwrap();
     let mut resumed = Trainer::resume(None, &parts, Some(6)).unwrap();
     assert_eq!(resumed.step_count(), 4);
-    resumed.run(false, |_| {}).unwrap();
+    resumed.run(|_| {}).unwrap();
 
     let (a, b) = (metrics(&whole), metrics(&parts));
     assert_eq!(a.len(), 6);
@@ -152,10 +152,11 @@ fn a_cosine_run_killed_between_checkpoints_resumes_as_if_never_stopped() {
         final_fraction: 0.1,
     };
     config.checkpoint_every = 3;
+    config.half = true;
     let whole = tmp.path().join("whole");
     new_trainer(&data, &whole, config.clone())
         .unwrap()
-        .run(false, |_| {})
+        .run(|_| {})
         .unwrap();
 
     // Killed right after step 5 was logged: the last checkpoint is step 3's, and the log
@@ -163,7 +164,7 @@ fn a_cosine_run_killed_between_checkpoints_resumes_as_if_never_stopped() {
     let parts = tmp.path().join("parts");
     let mut trainer = new_trainer(&data, &parts, config.clone()).unwrap();
     let killed = catch_unwind(AssertUnwindSafe(|| {
-        trainer.run(false, |p| {
+        trainer.run(|p| {
             if p.step == killed_at {
                 panic!("killed after step {killed_at}");
             }
@@ -185,7 +186,13 @@ fn a_cosine_run_killed_between_checkpoints_resumes_as_if_never_stopped() {
         resumed.data(),
         Some(std::path::absolute(&data).unwrap().as_path())
     );
-    resumed.run(false, |_| {}).unwrap();
+    resumed.run(|_| {}).unwrap();
+    let written = std::fs::read(parts.join("model.dmbn")).unwrap();
+    assert_eq!(
+        read_header(&written).unwrap().weights.dtype,
+        WeightDType::F16,
+        "the resumed run writes f16 weights, as the run asked"
+    );
 
     let (a, b) = (metrics(&whole), metrics(&parts));
     assert_eq!(a.len(), steps as usize);
@@ -232,7 +239,7 @@ fn the_quality_benchmark_keeps_the_best_model_on_held_out_sequences() {
     config.quality_sequences = 2;
     config.prefix_contexts = 0.5;
     let mut trainer = new_trainer(&data, &out, config).unwrap();
-    trainer.run(false, |_| {}).unwrap();
+    trainer.run(|_| {}).unwrap();
     let m = metrics(&out);
     let scores: Vec<(u64, f32)> = m
         .iter()
@@ -282,7 +289,7 @@ fn non_finite_loss_stops_and_keeps_the_last_checkpoint() {
     config.clip_norm = 1e30;
     config.checkpoint_every = 1;
     let mut trainer = new_trainer(&data, &out, config).unwrap();
-    let err = trainer.run(false, |_| {}).unwrap_err();
+    let err = trainer.run(|_| {}).unwrap_err();
     let TrainError::NonFinite { step, .. } = err else {
         panic!("expected a non-finite loss, got {err}")
     };
@@ -308,7 +315,7 @@ fn the_drawn_frame_weight_trains_the_attentive_model_s_own_frame_and_nothing_els
             config.drawn_frame_weight = weight;
             new_trainer(&data, &out, config)
                 .unwrap()
-                .run(false, |_| {})
+                .run(|_| {})
                 .unwrap();
             final_prediction(&out)
         };
@@ -330,7 +337,7 @@ fn beta_nll_changes_the_training_and_not_the_reported_nll_s_definition() {
         let mut trainer = new_trainer(&data, &out, config).unwrap();
         // The first step's loss parts come from the same weights and batch either way.
         let (first, _) = trainer.step().unwrap();
-        trainer.run(false, |_| {}).unwrap();
+        trainer.run(|_| {}).unwrap();
         (first, final_prediction(&out))
     };
     let ((plain, without), (weighted, with)) = (run(0.0), run(1.0));
@@ -392,7 +399,7 @@ fn init_starts_from_a_model_files_weights_and_normalisation() {
     let first = tmp.path().join("first");
     new_trainer(&data, &first, small(ModelKind::Pte, 2))
         .unwrap()
-        .run(false, |_| {})
+        .run(|_| {})
         .unwrap();
     let run = |init: Option<&Path>, name: &str| {
         let mut config = small(ModelKind::Pte, 1);
@@ -402,7 +409,7 @@ fn init_starts_from_a_model_files_weights_and_normalisation() {
         let out = tmp.path().join(name);
         new_trainer(&other, &out, config)
             .unwrap()
-            .run(false, |_| {})
+            .run(|_| {})
             .unwrap();
         final_prediction(&out)
     };

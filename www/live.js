@@ -56,12 +56,17 @@ export function forecastNow(step = state.step) {
   document.body.dataset.seen = String(from);
   // Everything observed: the last forecast stays on screen.
   if (from >= shown.len) return render();
-  predict({ from, chunk: CHUNK, firstAlone: true, keepEncoded: true });
+  predict({ from, chunk: CHUNK, firstAlone: true, keepEncoded: true, curve: curvesKey() });
+}
+
+/** What the error curves are of: the episode on screen, the observation rule, the modalities. */
+function curvesKey() {
+  return [state.episode?.digest, every(), ui.observe.value, state.shown?.len].join("|");
 }
 
 /** The error curves of the episode on screen under the current rule and modalities. */
 function curves() {
-  const key = [state.episode?.digest, every(), ui.observe.value, state.shown?.len].join("|");
+  const key = curvesKey();
   if (state.curves.key !== key) state.curves = { key, byModel: new Map(), version: 0 };
   return state.curves.byModel;
 }
@@ -104,7 +109,9 @@ function forecastError(from, mean, jointMean) {
 export function forecastDone(p) {
   const px = p.size * p.size * 3;
   const error = forecastError(p.from, p.mean.subarray(p.from * px), p.jointMean.subarray(p.from * JOINTS));
-  record(p.model, p.from, error);
+  // A forecast asked for under another rule (the rule's field edited while it ran) is not a
+  // point of the current curves.
+  if (p.curve === curvesKey()) record(p.model, p.from, error);
   state.timings.live.push({
     model: p.model,
     from: p.from,

@@ -55,7 +55,9 @@ pub use dmbn_attn::DmbnAttn;
 pub use dmbn_pte::DmbnPte;
 pub use encoded_contexts::EncodedContexts;
 pub use error::ModelError;
-pub use file::{load_bytes, load_bytes_expecting, read_header, save_bytes, ModelHeader};
+pub use file::{
+    load_bytes, load_bytes_expecting, read_header, save_bytes, ModelHeader, WeightDType,
+};
 pub use gaussian::bounded_sigma;
 pub use image_decoder::{upsample2, DecodedFrames, ImageDecoder, ImageDecoderConfig};
 pub use image_encoder::{ImageEncoder, ImageEncoderConfig};

@@ -104,6 +104,10 @@ pub struct TrainConfig {
     /// be `model`'s kind and frame size.
     #[serde(default)]
     pub init: Option<PathBuf>,
+    /// Write the final and best models with f16 weights (half the size); kept with the
+    /// checkpoint so that a resumed run writes what the run would have.
+    #[serde(default)]
+    pub half: bool,
 }
 
 impl TrainConfig {
@@ -133,6 +137,7 @@ impl TrainConfig {
             quality_sequences: 10,
             augment: None,
             init: None,
+            half: false,
         }
     }
 }

@@ -215,6 +215,12 @@ impl Trainer {
         &self.config
     }
 
+    /// Write the final and best models with f16 weights from now on (a resumed run asked
+    /// for the smaller files); the next checkpoint keeps it.
+    pub fn write_half(&mut self) {
+        self.config.half = true;
+    }
+
     /// The dataset root the run trains on.
     pub fn data(&self) -> Option<&Path> {
         self.data.as_deref()
@@ -305,12 +311,8 @@ impl Trainer {
     }
 
     /// Train to `config.steps`, validating, logging and checkpointing on the way; writes the
-    /// final model to `out/model.dmbn` (f16 weights when `half`) and returns its path.
-    pub fn run(
-        &mut self,
-        half: bool,
-        mut on_progress: impl FnMut(&Progress),
-    ) -> Result<PathBuf, TrainError> {
+    /// final model to `out/model.dmbn` (f16 weights when `config.half`) and returns its path.
+    pub fn run(&mut self, mut on_progress: impl FnMut(&Progress)) -> Result<PathBuf, TrainError> {
         let mut timer = (Instant::now(), self.step);
         let mut last_val = None;
         while self.step < self.config.steps {
@@ -330,7 +332,7 @@ impl Trainer {
                 None
             };
             let quality = if validating {
-                self.validate_quality(half)?
+                self.validate_quality()?
             } else {
                 None
             };
@@ -368,7 +370,7 @@ impl Trainer {
         let path = self.out.join("model.dmbn");
         write_atomic(
             &path,
-            &model::save_bytes(&self.model, &self.normalization, half)?,
+            &model::save_bytes(&self.model, &self.normalization, self.config.half)?,
         )?;
         Ok(path)
     }
@@ -376,7 +378,7 @@ impl Trainer {
     /// The quality benchmark on up to `config.quality_sequences` held-out sequences (evenly
     /// spread over them); a better [`ValQuality::score`] than any before is written to
     /// `out/best.dmbn`. `None` when it is off or there is nothing to score.
-    pub fn validate_quality(&mut self, half: bool) -> Result<Option<ValQuality>, TrainError> {
+    pub fn validate_quality(&mut self) -> Result<Option<ValQuality>, TrainError> {
         let (n, val) = (self.config.quality_sequences, &self.split.val);
         if n == 0 || val.is_empty() {
             return Ok(None);
@@ -392,7 +394,7 @@ impl Trainer {
         let score = quality.score();
         if score.is_finite() && self.best_quality.is_none_or(|(_, best)| score < best) {
             self.best_quality = Some((self.step, score));
-            let bytes = model::save_bytes(&self.model, &self.normalization, half)?;
+            let bytes = model::save_bytes(&self.model, &self.normalization, self.config.half)?;
             write_atomic(&self.best_path(), &bytes)?;
         }
         Ok(Some(quality))

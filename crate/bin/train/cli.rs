@@ -120,8 +120,8 @@ struct Args {
     #[arg(long)]
     augment: bool,
 
-    /// Store the final model's weights in f16 (pass it again with --resume: the checkpoint
-    /// does not keep it).
+    /// Store the final and best models' weights in f16 (half the size; a resumed run keeps
+    /// the run's choice, and --half with --resume turns it on).
     #[arg(long)]
     half: bool,
 }
@@ -156,7 +156,10 @@ fn defaults() -> TrainConfig {
 fn run(args: Args) -> Result<(), TrainError> {
     let model = args.model;
     let mut trainer = if args.resume {
-        let trainer = Trainer::resume(args.data.as_deref(), &args.out, args.steps)?;
+        let mut trainer = Trainer::resume(args.data.as_deref(), &args.out, args.steps)?;
+        if args.half {
+            trainer.write_half();
+        }
         let trained = trainer.config().model.kind;
         if model.is_some_and(|m| m != trained) {
             return Err(TrainError::config(
@@ -229,6 +232,7 @@ fn run(args: Args) -> Result<(), TrainError> {
         config.quality_sequences = args.quality_sequences;
         config.augment = args.augment.then(TimeWarpConfig::default);
         config.init = args.init.clone();
+        config.half = args.half;
         Trainer::new(data, &args.out, config)?
     };
     let steps = trainer.config().steps;
@@ -248,7 +252,7 @@ fn run(args: Args) -> Result<(), TrainError> {
         id_list(trainer.val_ids()),
         args.out.display()
     );
-    let path = trainer.run(args.half, |p| {
+    let path = trainer.run(|p| {
         bar.set_position(p.step);
         let val = p.val_loss.map_or("-".to_string(), |v| format!("{v:.4}"));
         bar.set_message(format!(
