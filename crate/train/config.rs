@@ -2,6 +2,7 @@ use std::path::PathBuf;
 
 use serde::{Deserialize, Deserializer, Serialize};
 
+use super::TrainError;
 use crate::augment::TimeWarpConfig;
 use crate::model::{ModelConfig, ModelKind};
 
@@ -139,6 +140,66 @@ impl TrainConfig {
             init: None,
             half: false,
         }
+    }
+
+    /// Reject settings that would fail later or silently do nothing.
+    pub fn validate(&self) -> Result<(), TrainError> {
+        let positive = [
+            ("steps", self.steps),
+            ("batch", self.batch as u64),
+            ("max_contexts", self.max_contexts as u64),
+            ("targets_per_sequence", self.targets_per_sequence as u64),
+            ("val_every", self.val_every),
+            ("checkpoint_every", self.checkpoint_every),
+        ];
+        for (field, value) in positive {
+            if value == 0 {
+                return Err(TrainError::config(field, "is 0: expected at least 1"));
+            }
+        }
+        if !(self.lr.is_finite() && self.lr > 0.0) {
+            return Err(TrainError::config(
+                "lr",
+                format!("{}: expected a positive number", self.lr),
+            ));
+        }
+        let weight = self.drawn_frame_weight;
+        if !(weight.is_finite() && weight >= 0.0) {
+            return Err(TrainError::config(
+                "drawn_frame_weight",
+                format!("{weight}: expected a finite value >= 0"),
+            ));
+        }
+        if !(0.0..=1.0).contains(&self.beta_nll) {
+            return Err(TrainError::config(
+                "beta_nll",
+                format!("{}: expected a value in [0, 1]", self.beta_nll),
+            ));
+        }
+        if !(self.clip_norm.is_finite() && self.clip_norm > 0.0) {
+            return Err(TrainError::config(
+                "clip_norm",
+                format!("{}: expected a positive number", self.clip_norm),
+            ));
+        }
+        let fractions = [
+            ("single_modality", self.single_modality),
+            ("prefix_contexts", self.prefix_contexts),
+        ];
+        for (field, value) in fractions {
+            if !(0.0..=1.0).contains(&value) {
+                return Err(TrainError::config(
+                    field,
+                    format!("{value}: expected a fraction in [0, 1]"),
+                ));
+            }
+        }
+        if let Some(warp) = &self.augment {
+            warp.validate()
+                .map_err(|reason| TrainError::config("augment", reason.to_string()))?;
+        }
+        self.model.validate()?;
+        Ok(())
     }
 }
 

@@ -56,7 +56,7 @@ impl Trainer {
     /// A fresh run on the dataset at `data`, writing into `out` (which must hold no checkpoint:
     /// continue such a run with [`Trainer::resume`]).
     pub fn new(data: &Path, out: &Path, config: TrainConfig) -> Result<Trainer, TrainError> {
-        validate(&config)?;
+        config.validate()?;
         if Checkpoint::read(out).is_ok() {
             return Err(TrainError::config(
                 "out",
@@ -111,7 +111,7 @@ impl Trainer {
         if let Some(steps) = steps {
             state.config.steps = steps;
         }
-        validate(&state.config)?;
+        state.config.validate()?;
         let data = match data {
             Some(data) => data.to_path_buf(),
             None => state.data.clone().ok_or_else(|| {
@@ -447,64 +447,4 @@ fn optimizer(config: &TrainConfig) -> ModuleOptimizer {
     AdamConfig::new()
         .with_grad_clipping(Some(GradientClippingConfig::Norm(config.clip_norm)))
         .init()
-}
-
-/// Reject settings that would fail later or silently do nothing.
-fn validate(config: &TrainConfig) -> Result<(), TrainError> {
-    let positive = [
-        ("steps", config.steps),
-        ("batch", config.batch as u64),
-        ("max_contexts", config.max_contexts as u64),
-        ("targets_per_sequence", config.targets_per_sequence as u64),
-        ("val_every", config.val_every),
-        ("checkpoint_every", config.checkpoint_every),
-    ];
-    for (field, value) in positive {
-        if value == 0 {
-            return Err(TrainError::config(field, "is 0: expected at least 1"));
-        }
-    }
-    if !(config.lr.is_finite() && config.lr > 0.0) {
-        return Err(TrainError::config(
-            "lr",
-            format!("{}: expected a positive number", config.lr),
-        ));
-    }
-    let weight = config.drawn_frame_weight;
-    if !(weight.is_finite() && weight >= 0.0) {
-        return Err(TrainError::config(
-            "drawn_frame_weight",
-            format!("{weight}: expected a finite value >= 0"),
-        ));
-    }
-    if !(0.0..=1.0).contains(&config.beta_nll) {
-        return Err(TrainError::config(
-            "beta_nll",
-            format!("{}: expected a value in [0, 1]", config.beta_nll),
-        ));
-    }
-    if !(config.clip_norm.is_finite() && config.clip_norm > 0.0) {
-        return Err(TrainError::config(
-            "clip_norm",
-            format!("{}: expected a positive number", config.clip_norm),
-        ));
-    }
-    let fractions = [
-        ("single_modality", config.single_modality),
-        ("prefix_contexts", config.prefix_contexts),
-    ];
-    for (field, value) in fractions {
-        if !(0.0..=1.0).contains(&value) {
-            return Err(TrainError::config(
-                field,
-                format!("{value}: expected a fraction in [0, 1]"),
-            ));
-        }
-    }
-    if let Some(warp) = &config.augment {
-        warp.validate()
-            .map_err(|reason| TrainError::config("augment", reason.to_string()))?;
-    }
-    config.model.validate()?;
-    Ok(())
 }
