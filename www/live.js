@@ -17,7 +17,16 @@ import { cssSize } from "./views.js";
 
 /** The observation rule: observe every `every`-th step. */
 export function every() {
-  return clampInt(ui.liveEvery.value, 1, 100);
+  return state.every;
+}
+
+/**
+ * The rule's field changed (or was set from the URL): its value becomes the rule. Read only
+ * then, so that a value being typed changes neither the forecasts nor the curves they join
+ * (the change cancels the forecast made under the old rule).
+ */
+export function takeRule() {
+  state.every = clampInt(ui.liveEvery.value, 1, 100);
 }
 
 /** The steps the rule has observed once `step` is reached: 0, k, 2k, … ≤ step. */
@@ -56,17 +65,12 @@ export function forecastNow(step = state.step) {
   document.body.dataset.seen = String(from);
   // Everything observed: the last forecast stays on screen.
   if (from >= shown.len) return render();
-  predict({ from, chunk: CHUNK, firstAlone: true, keepEncoded: true, curve: curvesKey() });
-}
-
-/** What the error curves are of: the episode on screen, the observation rule, the modalities. */
-function curvesKey() {
-  return [state.episode?.digest, every(), ui.observe.value, state.shown?.len].join("|");
+  predict({ from, chunk: CHUNK, firstAlone: true, keepEncoded: true });
 }
 
 /** The error curves of the episode on screen under the current rule and modalities. */
 function curves() {
-  const key = curvesKey();
+  const key = [state.episode?.digest, every(), ui.observe.value, state.shown?.len].join("|");
   if (state.curves.key !== key) state.curves = { key, byModel: new Map(), version: 0 };
   return state.curves.byModel;
 }
@@ -109,9 +113,7 @@ function forecastError(from, mean, jointMean) {
 export function forecastDone(p) {
   const px = p.size * p.size * 3;
   const error = forecastError(p.from, p.mean.subarray(p.from * px), p.jointMean.subarray(p.from * JOINTS));
-  // A forecast asked for under another rule (the rule's field edited while it ran) is not a
-  // point of the current curves.
-  if (p.curve === curvesKey()) record(p.model, p.from, error);
+  record(p.model, p.from, error);
   state.timings.live.push({
     model: p.model,
     from: p.from,

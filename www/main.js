@@ -3,6 +3,7 @@
 import { MODEL_NAMES, WORKERS } from "./config.js";
 import { generate } from "./episodes.js";
 import { Inference } from "./inference.js";
+import { takeRule } from "./live.js";
 import { selectModel } from "./models.js";
 import { predict, timePrediction } from "./prediction.js";
 import { state } from "./state.js";
@@ -18,6 +19,7 @@ async function main() {
   setState("loading");
   wire();
   const place = readUrl();
+  takeRule();
   ui.status.textContent = "Loading WebAssembly…";
   try {
     checkSupport();

@@ -51,9 +51,9 @@ export function observations(steps) {
  * forecast: the unseen rest) from the observed ones, drawing the chunks of `chunk` steps as they
  * come (at most once an animation frame). Live mode's options: `firstAlone`, the first step
  * comes alone first; `keepEncoded`, the workers keep the observations encoded per step of the
- * shown sequence and encode only the new ones; `curve`, the error curves it belongs to.
+ * shown sequence and encode only the new ones.
  */
-export async function predict({ from = 0, chunk = CHUNK, firstAlone = false, keepEncoded = false, curve = null } = {}) {
+export async function predict({ from = 0, chunk = CHUNK, firstAlone = false, keepEncoded = false } = {}) {
   const { shown } = state;
   if (state.fatal || !state.episode || !shown) return;
   const steps = observedSteps();
@@ -79,8 +79,6 @@ export async function predict({ from = 0, chunk = CHUNK, firstAlone = false, kee
     from,
     chunk,
     firstAlone,
-    /** Live mode: the error curves the forecast belongs to (live.js). */
-    curve,
     size,
     observed: steps.length,
     done: new Uint8Array(len),

@@ -17,6 +17,8 @@ export const state = {
   pendingObserved: null,
   /** The prediction on screen (or filling in). */
   prediction: null,
+  /** Live mode: the observation rule, every k-th step (taken from its field on change: live.js). */
+  every: 10,
   /** Live mode: the seen observations the forecast on screen was made from ("0,5,10"). */
   seenKey: "",
   /** Live mode: the error curves of the episode on screen, {key, byModel: Map(model → points), version}. */

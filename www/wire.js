@@ -6,7 +6,7 @@ import { droppedFiles, openFolder, pickedFiles, sequenceChosen } from "./folder.
 import { selectModel } from "./models.js";
 import { chooseFirst, chooseRandom, updateObsInfo } from "./observations.js";
 import { pause, play, toggle } from "./playback.js";
-import { compareModels, forecastNow, redrawErrors } from "./live.js";
+import { compareModels, forecastNow, redrawErrors, takeRule } from "./live.js";
 import { cancelPrediction, invalidate, predict } from "./prediction.js";
 import { state } from "./state.js";
 import { clearError, settle } from "./status.js";
@@ -137,6 +137,7 @@ export function wire() {
   });
   ui.predict.addEventListener("click", () => (state.shown?.mode === "live" ? forecastNow() : predict()));
   ui.liveEvery.addEventListener("change", () => {
+    takeRule();
     writeUrl();
     forecastNow();
     redrawErrors();

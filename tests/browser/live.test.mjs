@@ -123,8 +123,17 @@ describe("live mode", () => {
     assert.equal(await page.inputValue("#live-every"), "10");
     assert.equal(await page.inputValue("#ahead"), "5");
     assert.equal(await page.isChecked("#ghost"), false);
+    // A value being typed is not the rule yet: a forecast that finishes meanwhile is made and
+    // plotted under the old rule, and the new rule's curve starts empty.
+    const finished = await forecasts(page);
+    await page.locator("#scrubber").fill("25");
     await page.fill("#live-every", "8");
+    await page.waitForFunction((n) => Number(document.body.dataset.predictions ?? 0) > n, finished);
+    assert.equal(await page.evaluate(() => window.dmbnTimings.live.at(-1).from), 21, "seen under every 10");
+    assert.match(await page.textContent("#obs-info"), /every 10:/);
     await page.locator("#live-every").dispatchEvent("change");
+    await page.waitForFunction(() => window.dmbnTimings.live.at(-1)?.from === 25 && document.body.dataset.state === "predicted");
+    assert.equal(await page.getAttribute("#error-plot", "data-points"), "1", "only the new rule's forecast");
     await page.waitForFunction(() => new URLSearchParams(location.search).get("every") === "8");
     const url = new URL(page.url());
     assert.equal(url.searchParams.get("mode"), "live");
