@@ -4,17 +4,20 @@
 // are timed on one thread and split over N worker threads (each with its own instance, as
 // the page's inference workers: WebAssembly here has no shared-memory threads).
 //
-// Usage: node bench/model.mjs [PKG_DIR] [--reps N] [--workers N]
+// Usage: node bench/model.mjs [PKG_DIR] [--reps N] [--workers N] [--model FILE]...
 //   PKG_DIR: a `wasm-pack build --release --target nodejs` output (default pkg-node/, as
 //   `npm run bench:wasm` builds it). --workers: default the number of cores (at least 2).
+//   --model: time these model files instead of the shipped ones (repeatable).
 //   Prints medians in ms and one `json:` line.
 import { createRequire } from "node:module";
 import { existsSync, readFileSync } from "node:fs";
 import { availableParallelism } from "node:os";
-import { dirname, join, resolve } from "node:path";
+import { basename, dirname, join, resolve } from "node:path";
 import { fileURLToPath } from "node:url";
 import { Worker, isMainThread, parentPort, workerData } from "node:worker_threads";
 
+/** The shipped models timed by default. */
+const SHIPPED = ["attn-sim.dmbn", "dmbn-sim.dmbn", "pte-sim.dmbn"];
 const root = join(dirname(fileURLToPath(import.meta.url)), "..");
 const load = (pkgDir) => createRequire(import.meta.url)(join(pkgDir, "dmbn.js"));
 
@@ -36,8 +39,10 @@ async function main() {
   let reps = 10;
   let workers = Math.max(2, availableParallelism());
   let pkgDir = join(root, "pkg-node");
+  const files = [];
   for (let i = 0; i < args.length; i++) {
     if (args[i] === "--reps") reps = Number(args[++i]);
+    else if (args[i] === "--model") files.push(resolve(args[++i] ?? ""));
     else if (args[i] === "--workers") workers = Number(args[++i]);
     else pkgDir = resolve(args[i]);
   }
@@ -65,9 +70,12 @@ async function main() {
 
   console.log(`model benchmark (wasm, node ${process.version}): 64x64, median of ${reps} runs, ${workers} workers`);
   const out = [];
-  for (const [kind, file] of [["attn", "attn-sim.dmbn"], ["dmbn", "dmbn-sim.dmbn"], ["pte", "pte-sim.dmbn"]]) {
-    const modelPath = join(root, "assets", "models", file);
+  const custom = files.length > 0;
+  if (!custom) files.push(...SHIPPED.map((file) => join(root, "assets", "models", file)));
+  for (const modelPath of files) {
+    if (!existsSync(modelPath)) fail(`no model file at ${modelPath}`);
     const model = wasm.Model.fromBytes(readFileSync(modelPath));
+    const kind = custom ? basename(modelPath, ".dmbn") : model.kind;
     const one = await median(() => model.predict(frames, joints, times, new Float32Array([0.5]), 0.5).free(), reps * 5);
     const sequence = await median(() => model.predict(frames, joints, times, seq100, 0.5).free(), reps);
     model.free();

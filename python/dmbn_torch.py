@@ -49,6 +49,16 @@ MASKED_SCORE = -1.0e4
 CHUNK = 25
 
 
+def image_decoder_filters(config):
+    """The image decoder's (blocks, tail) filters: the header's `decoder_filters` (blocks, then
+    the two full-resolution convolutions) or the original's."""
+    blocks = DECODER_FILTERS[config["image_size"]]
+    filters = config.get("decoder_filters")
+    if filters is None:
+        return blocks, IMAGE_DECODER_TAIL
+    return filters[: len(blocks)], filters[len(blocks):]
+
+
 def bounded_sigma(raw, floor):
     """σ = floor + (1 − floor)·softplus(raw)."""
     return floor + (1.0 - floor) * F.softplus(raw)
@@ -161,13 +171,14 @@ class ImageDecoder(nn.Module):
 
     def __init__(self, filters, sigma_floor, gated):
         super().__init__()
+        filters, tail_filters = filters
         channels, convs = SHARED // 4, []
         for f in filters:
             convs.append(conv3x3(channels, f))
             channels = f
         self.blocks = nn.ModuleList(convs)
         tail = []
-        for f in IMAGE_DECODER_TAIL:
+        for f in tail_filters:
             tail.append(conv3x3(channels, f))
             channels = f
         self.tail = nn.ModuleList(tail)
@@ -269,7 +280,7 @@ class Dmbn(nn.Module):
         s, h = config["image_size"], config["hidden"]
         self.image_encoder = ImageEncoder(4, ENCODER_FILTERS[s], h)
         self.joint_encoder = JointEncoder(8, h)
-        self.decoder = Decoder(h + 1, DECODER_FILTERS[s], config["sigma_floor"])
+        self.decoder = Decoder(h + 1, image_decoder_filters(config), config["sigma_floor"])
 
     def encode(self, c):
         b, n, _, s, _ = c.frames.shape
@@ -311,7 +322,7 @@ class DmbnPte(_PteEncoders):
     def __init__(self, config):
         super().__init__()
         self._pte_init(config)
-        self.decoder = Decoder(config["hidden"], DECODER_FILTERS[config["image_size"]],
+        self.decoder = Decoder(config["hidden"], image_decoder_filters(config),
                                config["sigma_floor"])
 
     def encode(self, c):
@@ -399,7 +410,7 @@ class DmbnAttn(_PteEncoders):
         self.joint_attention = MultiHeadAttention(h, heads)
         self.observed = nn.Parameter(torch.zeros(2, h))
         self.start_projection = nn.Linear(START_FEATURES, h)
-        self.decoder = Decoder(h, DECODER_FILTERS[config["image_size"]], config["sigma_floor"],
+        self.decoder = Decoder(h, image_decoder_filters(config), config["sigma_floor"],
                                gated=True)
 
     def encode(self, c):

@@ -351,6 +351,53 @@ fn save_and_load_a_file() {
     assert_eq!(diff, 0.0);
 }
 
+#[test]
+fn a_narrow_image_decoder_is_saved_with_its_filters() {
+    let device = device();
+    let narrow = vec![128, 64, 32, 32, 16, 8, 8];
+    let model = {
+        let _turn = INIT.lock().unwrap_or_else(|e| e.into_inner());
+        device.seed(8);
+        let config = ModelConfig::new(ModelKind::Attn).with_decoder_filters(Some(narrow.clone()));
+        let model = config.init(&device).unwrap();
+        model.draw_weights();
+        model
+    };
+    let bytes = save_bytes(&model, &Normalization::identity(), false).unwrap();
+    let (_, full, _) = saved(ModelKind::Attn, false);
+    assert!(
+        bytes.len() < full.len(),
+        "{} vs {}",
+        bytes.len(),
+        full.len()
+    );
+    let (loaded, _, config) = load_bytes(&bytes, &device).unwrap();
+    assert_eq!(config.decoder_filters, Some(narrow));
+    let t = tensors(&batch(1, 2, 2, 64, 8), &device).unwrap();
+    let p = model.forward(&t).unwrap();
+    assert_eq!(p.image_mean.dims(), [1, 2, 3, 64, 64]);
+    assert_eq!(prediction_diff(&p, &loaded.forward(&t).unwrap()), 0.0);
+    // A header whose filters do not describe the weights is refused, as are filters that
+    // do not fit the frame size.
+    let (header, weights) = parts(&bytes);
+    for (value, config_error) in [
+        (serde_json::Value::Null, false),
+        (serde_json::json!([128, 64, 32, 32, 16, 16, 8]), false),
+        (serde_json::json!([128, 64, 32]), true),
+    ] {
+        let mut header = header.clone();
+        header["config"]["decoder_filters"] = value.clone();
+        let err = load_err(&assemble(&header, &weights));
+        match err {
+            ModelError::Config { field, .. } if config_error => {
+                assert_eq!(field, "decoder_filters")
+            }
+            ModelError::Weights(_) if !config_error => {}
+            e => panic!("decoder_filters {value}: {e}"),
+        }
+    }
+}
+
 /// Rebuilds a file from a header and a weight section (the checksum and length follow the
 /// weights unless the header says otherwise).
 fn assemble(header: &serde_json::Value, weights: &[u8]) -> Vec<u8> {

@@ -1,6 +1,7 @@
 use burn::config::Config;
 use serde::{Deserialize, Serialize};
 
+use super::image_decoder::IMAGE_DECODER_TAIL;
 use super::ModelError;
 
 pub use crate::data::IMAGE_SIZES;
@@ -92,6 +93,11 @@ pub struct ModelConfig {
     /// Attention heads of the attentive model (a divisor of `hidden`); unused by the others.
     /// Absent from files written before the attentive model: those hold no such model.
     pub heads: Option<usize>,
+    /// Filters of every image-decoder convolution before the heads: one per upsampling
+    /// block, then the two at full resolution. Absent: the original's (see
+    /// [`ModelConfig::image_decoder`]); a narrower decoder decodes a frame with fewer
+    /// multiply-adds (the page's live mode).
+    pub decoder_filters: Option<Vec<usize>>,
 }
 
 impl ModelConfig {
@@ -105,6 +111,7 @@ impl ModelConfig {
         if self.kind == ModelKind::Attn {
             check_heads(self.attention_heads(), self.hidden)?;
         }
+        self.image_decoder()?;
         if !(0.0..1.0).contains(&self.sigma_floor) {
             return Err(ModelError::config(
                 "sigma_floor",
@@ -118,6 +125,31 @@ impl ModelConfig {
             ));
         }
         Ok(())
+    }
+
+    /// The image decoder's filters: its upsampling blocks' and its two full-resolution
+    /// convolutions' (`decoder_filters`, or the original's: [`decoder_filters`] and
+    /// [`IMAGE_DECODER_TAIL`]).
+    pub fn image_decoder(&self) -> Result<(Vec<usize>, Vec<usize>), ModelError> {
+        let blocks = decoder_filters(self.image_size)?;
+        let Some(filters) = &self.decoder_filters else {
+            return Ok((blocks, IMAGE_DECODER_TAIL.to_vec()));
+        };
+        let expected = blocks.len() + IMAGE_DECODER_TAIL.len();
+        if filters.len() != expected || filters.contains(&0) {
+            return Err(ModelError::config(
+                "decoder_filters",
+                format!(
+                    "is {filters:?}: expected {expected} filter counts above 0 for {size}x{size} \
+                     frames ({} upsampling blocks, then {} convolutions at full resolution)",
+                    blocks.len(),
+                    IMAGE_DECODER_TAIL.len(),
+                    size = self.image_size,
+                ),
+            ));
+        }
+        let (blocks, tail) = filters.split_at(blocks.len());
+        Ok((blocks.to_vec(), tail.to_vec()))
     }
 
     /// Heads of the attentive model's attention: `heads`, `ATTENTION_HEADS` (8) by default.
@@ -214,6 +246,33 @@ mod tests {
             .validate()
             .is_err());
         assert!(ModelConfig::new(ModelKind::Attn).validate().is_ok());
+        let narrow = |filters: Vec<usize>| {
+            ModelConfig::new(ModelKind::Attn)
+                .with_decoder_filters(Some(filters))
+                .validate()
+        };
+        let err = narrow(vec![64, 32, 16]).unwrap_err().to_string();
+        assert!(
+            err.contains("decoder_filters") && err.contains("expected 7"),
+            "{err}"
+        );
+        assert!(narrow(vec![128, 64, 32, 32, 16, 16, 0]).is_err());
+        assert!(narrow(vec![128, 64, 32, 32, 16, 16, 8]).is_ok());
+    }
+
+    #[test]
+    fn decoder_filters_default_to_the_originals_and_split_into_blocks_and_tail() {
+        let config = ModelConfig::new(ModelKind::Pte);
+        let (blocks, tail) = config.image_decoder().unwrap();
+        assert_eq!(blocks, decoder_filters(64).unwrap());
+        assert_eq!(tail, IMAGE_DECODER_TAIL);
+        let config = config.with_decoder_filters(Some(vec![128, 64, 32, 32, 16, 8, 4]));
+        let (blocks, tail) = config.image_decoder().unwrap();
+        assert_eq!((blocks, tail), (vec![128, 64, 32, 32, 16], vec![8, 4]));
+        // Files written before the field hold the original's.
+        let json = r#"{"kind":"attn","image_size":64,"hidden":128,"sigma_floor":0.01,"joint_weight":0.01,"heads":null}"#;
+        let old: ModelConfig = serde_json::from_str(json).unwrap();
+        assert_eq!(old.decoder_filters, None);
     }
 
     #[test]

@@ -18,6 +18,9 @@ pub struct DecoderConfig {
     pub shared: usize,
     /// Filters of the image decoder's upsampling blocks.
     pub image_filters: Vec<usize>,
+    /// Filters of the image decoder's two convolutions at full resolution.
+    #[config(default = "super::image_decoder::IMAGE_DECODER_TAIL.to_vec()")]
+    pub image_tail: Vec<usize>,
     /// Lower bound of every predicted σ.
     #[config(default = 0.01)]
     pub sigma_floor: f64,
@@ -44,6 +47,7 @@ impl DecoderConfig {
         Decoder {
             shared: super::init::dense(self.input, self.shared, device),
             image: ImageDecoderConfig::new(self.image_filters.clone())
+                .with_tail(self.image_tail.clone())
                 .with_input(self.shared)
                 .with_sigma_floor(self.sigma_floor)
                 .with_gated(self.gated)

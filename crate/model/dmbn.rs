@@ -1,7 +1,7 @@
 use burn::module::Module;
 use burn::tensor::{Device, Tensor};
 
-use super::config::{decoder_filters, encoder_filters};
+use super::config::encoder_filters;
 use super::decoder::{Decoder, DecoderConfig};
 use super::image_encoder::{ImageEncoder, ImageEncoderConfig};
 use super::joint_encoder::{JointEncoder, JointEncoderConfig};
@@ -31,12 +31,14 @@ impl Dmbn {
     /// [`ModelConfig::init`]); fails on an unsupported image size.
     pub fn init(config: &ModelConfig, device: &Device) -> Result<Dmbn, ModelError> {
         let hidden = config.hidden;
+        let (blocks, tail) = config.image_decoder()?;
         Ok(Dmbn {
             image_encoder: ImageEncoderConfig::new(4, encoder_filters(config.image_size)?)
                 .with_hidden(hidden)
                 .init(device),
             joint_encoder: JointEncoderConfig::new(8).with_hidden(hidden).init(device),
-            decoder: DecoderConfig::new(hidden + 1, decoder_filters(config.image_size)?)
+            decoder: DecoderConfig::new(hidden + 1, blocks)
+                .with_image_tail(tail)
                 .with_sigma_floor(config.sigma_floor)
                 .init(device),
         })

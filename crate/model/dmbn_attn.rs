@@ -3,7 +3,7 @@ use burn::nn::attention::{MhaInput, MultiHeadAttention, MultiHeadAttentionConfig
 use burn::nn::Linear;
 use burn::tensor::{Device, Tensor};
 
-use super::config::{check_heads, decoder_filters};
+use super::config::check_heads;
 use super::context_projection::ContextProjection;
 use super::decoder::{Decoder, DecoderConfig};
 use super::dmbn_pte::{pte_context_encodings, pte_encoders, PteEncoders};
@@ -68,6 +68,7 @@ impl DmbnAttn {
     pub fn init(config: &ModelConfig, device: &Device) -> Result<DmbnAttn, ModelError> {
         let (hidden, heads) = (config.hidden, config.attention_heads());
         check_heads(heads, hidden)?;
+        let (blocks, tail) = config.image_decoder()?;
         let PteEncoders {
             image_encoder,
             joint_encoder,
@@ -88,7 +89,8 @@ impl DmbnAttn {
             observed: Param::from_tensor(Tensor::zeros([2, hidden], device)),
             start_projection: super::init::dense(START_FEATURES, hidden, device),
             decoder: starting_at_the_observations(
-                DecoderConfig::new(hidden, decoder_filters(config.image_size)?)
+                DecoderConfig::new(hidden, blocks)
+                    .with_image_tail(tail)
                     .with_sigma_floor(config.sigma_floor)
                     .with_gated(true)
                     .init(device),

@@ -1,7 +1,7 @@
 use burn::module::Module;
 use burn::tensor::{Device, Tensor};
 
-use super::config::{decoder_filters, encoder_filters};
+use super::config::encoder_filters;
 use super::context_projection::{ContextProjection, ContextProjectionConfig};
 use super::decoder::{Decoder, DecoderConfig};
 use super::image_encoder::{ImageEncoder, ImageEncoderConfig};
@@ -39,6 +39,7 @@ impl DmbnPte {
     /// Builds the network from the model's config (its kind is not checked: see
     /// [`ModelConfig::init`]); fails on an unsupported image size.
     pub fn init(config: &ModelConfig, device: &Device) -> Result<DmbnPte, ModelError> {
+        let (blocks, tail) = config.image_decoder()?;
         let PteEncoders {
             image_encoder,
             joint_encoder,
@@ -52,7 +53,8 @@ impl DmbnPte {
             time,
             image_projection,
             joint_projection,
-            decoder: DecoderConfig::new(config.hidden, decoder_filters(config.image_size)?)
+            decoder: DecoderConfig::new(config.hidden, blocks)
+                .with_image_tail(tail)
                 .with_sigma_floor(config.sigma_floor)
                 .init(device),
         })

@@ -15,7 +15,8 @@ use super::FrameStart;
 /// a model that only copies cannot forecast what it has not seen).
 const GATE_BIAS: f32 = 0.0;
 
-/// Filters of the two convolutions between the last upsampling block and the heads.
+/// Filters of the two convolutions between the last upsampling block and the heads, the
+/// original's.
 pub const IMAGE_DECODER_TAIL: [usize; 2] = [16, 8];
 
 /// Configuration of an [`ImageDecoder`].
@@ -26,6 +27,9 @@ pub struct ImageDecoderConfig {
     pub input: usize,
     /// Filters of the upsampling blocks; each doubles the frame, starting from 2x2.
     pub filters: Vec<usize>,
+    /// Filters of the convolutions between the last upsampling block and the heads.
+    #[config(default = "IMAGE_DECODER_TAIL.to_vec()")]
+    pub tail: Vec<usize>,
     /// Lower bound of the predicted σ.
     #[config(default = 0.01)]
     pub sigma_floor: f64,
@@ -36,7 +40,7 @@ pub struct ImageDecoderConfig {
 }
 
 /// The image decoder: reshape to 2x2, blocks of Conv 3x3 + ReLU + nearest UpSampling x2,
-/// Conv 16 + ReLU, Conv 8 + ReLU, then two 3-channel 3x3 heads: the mean (through a sigmoid,
+/// Conv 16 + ReLU, Conv 8 + ReLU (the original's tail), then two 3-channel 3x3 heads: the mean (through a sigmoid,
 /// since pixels lie in [0, 1]) and σ (see [`bounded_sigma`]); gated, a 1-channel gate head g
 /// too, and the mean is g·start + (1 − g)·its own with g = n + (1 − n)·σ(gate), n the
 /// start's nearness to an observation (g = 1 at an observed step, 0 where the start is not
@@ -87,7 +91,7 @@ impl ImageDecoderConfig {
                 .collect()
         };
         let blocks = layers(&self.filters);
-        let tail = layers(&IMAGE_DECODER_TAIL);
+        let tail = layers(&self.tail);
         ImageDecoder {
             blocks,
             tail,

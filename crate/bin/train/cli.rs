@@ -73,6 +73,11 @@ struct Args {
     /// Frame size the model works at (64 or 128; frames are resized when read).
     #[arg(long, default_value_t = defaults().model.image_size)]
     image_size: usize,
+    /// Filters of the image decoder's convolutions before its heads, comma-separated: one per
+    /// upsampling block, then two at full resolution (the original's at 64 px:
+    /// 256,128,64,64,32,16,8). Fewer filters decode a frame with fewer multiply-adds.
+    #[arg(long, value_delimiter = ',', conflicts_with_all = ["resume", "init"])]
+    decoder_filters: Option<Vec<usize>>,
     /// Base learning rate (Adam).
     #[arg(long, default_value_t = defaults().lr)]
     lr: f64,
@@ -202,6 +207,7 @@ fn run(args: Args) -> Result<(), TrainError> {
                 ModelConfig::new(kind)
                     .with_image_size(args.image_size)
                     .with_sigma_floor(args.sigma_floor)
+                    .with_decoder_filters(args.decoder_filters.clone())
             })
             .with_joint_weight(args.joint_weight);
         let mut config = TrainConfig::new(model, steps, args.seed);
