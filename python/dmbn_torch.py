@@ -165,15 +165,15 @@ class MultiHeadAttention(nn.Module):
 
 
 class ImageDecoder(nn.Module):
-    """2x2 start, Conv 3x3 + ReLU + nearest UpSampling x2 blocks, Conv 16, Conv 8, mean
+    """2x2 start, Conv 3x3 + ReLU + nearest UpSampling x2 blocks, two full-resolution convs
+    (the original's Conv 16, Conv 8; `image_decoder_filters` gives both widths), mean
     (sigmoid) and σ heads; gated (the attentive model), a gate head mixes the mean with the
     interpolated observed frames."""
 
-    def __init__(self, filters, sigma_floor, gated):
+    def __init__(self, blocks, tail_filters, sigma_floor, gated):
         super().__init__()
-        filters, tail_filters = filters
         channels, convs = SHARED // 4, []
-        for f in filters:
+        for f in blocks:
             convs.append(conv3x3(channels, f))
             channels = f
         self.blocks = nn.ModuleList(convs)
@@ -228,12 +228,13 @@ class JointDecoder(nn.Module):
 
 
 class Decoder(nn.Module):
-    """The shared Dense 1024 + ReLU, then the image and joint decoders."""
+    """The shared Dense 1024 + ReLU, then the image and joint decoders (`image_filters`: the
+    image decoder's (blocks, tail) widths, as `image_decoder_filters` returns them)."""
 
-    def __init__(self, inputs, filters, sigma_floor, gated=False):
+    def __init__(self, inputs, image_filters, sigma_floor, gated=False):
         super().__init__()
         self.shared = nn.Linear(inputs, SHARED)
-        self.image = ImageDecoder(filters, sigma_floor, gated)
+        self.image = ImageDecoder(*image_filters, sigma_floor, gated)
         self.joint = JointDecoder(sigma_floor)
 
     def forward(self, x, start=None):

@@ -66,12 +66,14 @@ fn device() -> Device {
 static INIT: Mutex<()> = Mutex::new(());
 
 fn model(kind: ModelKind, image_size: usize, device: &Device) -> Model {
+    init(ModelConfig::new(kind).with_image_size(image_size), device)
+}
+
+/// The model `config` describes, with seeded weights drawn.
+fn init(config: ModelConfig, device: &Device) -> Model {
     let _turn = INIT.lock().unwrap_or_else(|e| e.into_inner());
     device.seed(7);
-    let model = ModelConfig::new(kind)
-        .with_image_size(image_size)
-        .init(device)
-        .unwrap();
+    let model = config.init(device).unwrap();
     model.draw_weights();
     model
 }
@@ -355,14 +357,8 @@ fn save_and_load_a_file() {
 fn a_narrow_image_decoder_is_saved_with_its_filters() {
     let device = device();
     let narrow = vec![128, 64, 32, 32, 16, 8, 8];
-    let model = {
-        let _turn = INIT.lock().unwrap_or_else(|e| e.into_inner());
-        device.seed(8);
-        let config = ModelConfig::new(ModelKind::Attn).with_decoder_filters(Some(narrow.clone()));
-        let model = config.init(&device).unwrap();
-        model.draw_weights();
-        model
-    };
+    let config = ModelConfig::new(ModelKind::Attn).with_decoder_filters(Some(narrow.clone()));
+    let model = init(config, &device);
     let bytes = save_bytes(&model, &Normalization::identity(), false).unwrap();
     let (_, full, _) = saved(ModelKind::Attn, false);
     assert!(
