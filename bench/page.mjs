@@ -55,12 +55,13 @@ const DEFAULT = MODELS[0][0];
 const NAMES = { attn: "Attentive", dmbn: "DMBN", pte: "DMBN-PTE" };
 
 async function waitState(page, wanted) {
-  await page.waitForFunction(
-    (w) => document.body.dataset.state === w || document.body.dataset.state === "error",
+  // The state that ended the wait, not one read after it: live mode's playback moves on.
+  const reached = await page.waitForFunction(
+    (w) => [w, "error"].includes(document.body.dataset.state) && document.body.dataset.state,
     wanted,
     { timeout: TIMEOUT },
   );
-  const state = await page.evaluate(() => document.body.dataset.state);
+  const state = await reached.jsonValue();
   if (state !== wanted) throw new Error(`page: ${await page.locator("#error").textContent()}`);
 }
 

@@ -67,7 +67,7 @@ if [ "${TRAIN:-0}" = 1 ]; then
   longer=(--lr 5e-4 --beta-nll 1)
   for m in "${models[@]}"; do
     case $set_name/$m in
-      sim/attn) stage attn "${first[@]}" --model attn --beta-nll 1 --decoder-filters 128,64,32,32,16,16,8
+      sim/attn) stage attn "${first[@]}" --model attn --beta-nll 1 --decoder-filters 128,64,32,32,16,16,8 --coarse-tail
         file[$m]=$out/runs/attn/best.dmbn ;;
       sim/pte) stage pte "${first[@]}" --model pte --beta-nll 1
         stage pte-2 "${longer[@]}" --init "$out/runs/pte/model.dmbn" --steps 3000 --seed 2

@@ -49,14 +49,16 @@ MASKED_SCORE = -1.0e4
 CHUNK = 25
 
 
-def image_decoder_filters(config):
-    """The image decoder's (blocks, tail) filters: the header's `decoder_filters` (blocks, then
-    the two full-resolution convolutions) or the original's."""
+def image_decoder_shape(config):
+    """The image decoder's (blocks, tail, coarse_tail): the header's `decoder_filters` (blocks,
+    then the two tail convolutions) or the original's, and whether the tail runs at half
+    resolution (`coarse_tail`; absent in older files: no)."""
     blocks = DECODER_FILTERS[config["image_size"]]
+    coarse = bool(config.get("coarse_tail"))
     filters = config.get("decoder_filters")
     if filters is None:
-        return blocks, IMAGE_DECODER_TAIL
-    return filters[: len(blocks)], filters[len(blocks):]
+        return blocks, IMAGE_DECODER_TAIL, coarse
+    return filters[: len(blocks)], filters[len(blocks):], coarse
 
 
 def bounded_sigma(raw, floor):
@@ -166,11 +168,11 @@ class MultiHeadAttention(nn.Module):
 
 class ImageDecoder(nn.Module):
     """2x2 start, Conv 3x3 + ReLU + nearest UpSampling x2 blocks, two full-resolution convs
-    (the original's Conv 16, Conv 8; `image_decoder_filters` gives both widths), mean
-    (sigmoid) and σ heads; gated (the attentive model), a gate head mixes the mean with the
-    interpolated observed frames."""
+    (the original's Conv 16, Conv 8; `image_decoder_shape` gives both widths; with
+    `coarse_tail` they come before the last upsampling), mean (sigmoid) and σ heads; gated (the
+    attentive model), a gate head mixes the mean with the interpolated observed frames."""
 
-    def __init__(self, blocks, tail_filters, sigma_floor, gated):
+    def __init__(self, blocks, tail_filters, coarse_tail, sigma_floor, gated):
         super().__init__()
         channels, convs = SHARED // 4, []
         for f in blocks:
@@ -186,13 +188,18 @@ class ImageDecoder(nn.Module):
         self.sigma = conv3x3(channels, 3)
         self.gate = conv3x3(channels, 1) if gated else None
         self.sigma_floor = sigma_floor
+        self.coarse_tail = coarse_tail
 
     def forward(self, x, start=None):
         y = x.reshape(x.shape[0], SHARED // 4, 2, 2)
+        # The last block's output is upsampled after the tail when the tail is coarse.
+        last = len(self.blocks) - int(self.coarse_tail)
         for i, conv in enumerate(list(self.blocks) + list(self.tail)):
-            if 0 < i <= len(self.blocks):
+            if 0 < i <= last:
                 y = F.interpolate(y, scale_factor=2, mode="nearest")
             y = F.relu(conv(y))
+        if self.coarse_tail:
+            y = F.interpolate(y, scale_factor=2, mode="nearest")
         drawn = torch.sigmoid(self.mean(y))
         sigma = bounded_sigma(self.sigma(y), self.sigma_floor)
         if self.gate is None or start is None:
@@ -228,13 +235,13 @@ class JointDecoder(nn.Module):
 
 
 class Decoder(nn.Module):
-    """The shared Dense 1024 + ReLU, then the image and joint decoders (`image_filters`: the
-    image decoder's (blocks, tail) widths, as `image_decoder_filters` returns them)."""
+    """The shared Dense 1024 + ReLU, then the image and joint decoders (`image_shape`: the
+    image decoder's (blocks, tail, coarse_tail), as `image_decoder_shape` returns them)."""
 
-    def __init__(self, inputs, image_filters, sigma_floor, gated=False):
+    def __init__(self, inputs, image_shape, sigma_floor, gated=False):
         super().__init__()
         self.shared = nn.Linear(inputs, SHARED)
-        self.image = ImageDecoder(*image_filters, sigma_floor, gated)
+        self.image = ImageDecoder(*image_shape, sigma_floor, gated)
         self.joint = JointDecoder(sigma_floor)
 
     def forward(self, x, start=None):
@@ -281,7 +288,7 @@ class Dmbn(nn.Module):
         s, h = config["image_size"], config["hidden"]
         self.image_encoder = ImageEncoder(4, ENCODER_FILTERS[s], h)
         self.joint_encoder = JointEncoder(8, h)
-        self.decoder = Decoder(h + 1, image_decoder_filters(config), config["sigma_floor"])
+        self.decoder = Decoder(h + 1, image_decoder_shape(config), config["sigma_floor"])
 
     def encode(self, c):
         b, n, _, s, _ = c.frames.shape
@@ -323,7 +330,7 @@ class DmbnPte(_PteEncoders):
     def __init__(self, config):
         super().__init__()
         self._pte_init(config)
-        self.decoder = Decoder(config["hidden"], image_decoder_filters(config),
+        self.decoder = Decoder(config["hidden"], image_decoder_shape(config),
                                config["sigma_floor"])
 
     def encode(self, c):
@@ -411,7 +418,7 @@ class DmbnAttn(_PteEncoders):
         self.joint_attention = MultiHeadAttention(h, heads)
         self.observed = nn.Parameter(torch.zeros(2, h))
         self.start_projection = nn.Linear(START_FEATURES, h)
-        self.decoder = Decoder(h, image_decoder_filters(config), config["sigma_floor"],
+        self.decoder = Decoder(h, image_decoder_shape(config), config["sigma_floor"],
                                gated=True)
 
     def encode(self, c):

@@ -10,8 +10,8 @@ use burn::tensor::{Device, Tensor, TensorData};
 use dmbn::augment::Batch;
 use dmbn::data::write_atomic;
 use dmbn::model::{
-    file, load_bytes, load_bytes_expecting, read_header, save_bytes, tensors, Model, ModelConfig,
-    ModelError, ModelKind, Normalization, Prediction, Representation,
+    file, load_bytes, load_bytes_expecting, read_header, save_bytes, tensors, BatchTensors, Model,
+    ModelConfig, ModelError, ModelKind, Normalization, Prediction, Representation,
 };
 
 /// A small deterministic pseudo-random generator (values in [0, 1)).
@@ -353,6 +353,21 @@ fn save_and_load_a_file() {
     assert_eq!(diff, 0.0);
 }
 
+/// The config `bytes` (`model` saved) read back with, after checking that the model read
+/// predicts 64x64 frames exactly as `model` does; and that batch and prediction.
+fn reads_back_exactly(
+    model: &Model,
+    bytes: &[u8],
+    device: &Device,
+) -> (ModelConfig, (BatchTensors, Prediction)) {
+    let (loaded, _, config) = load_bytes(bytes, device).unwrap();
+    let t = tensors(&batch(1, 2, 2, 64, 8), device).unwrap();
+    let p = model.forward(&t).unwrap();
+    assert_eq!(p.image_mean.dims(), [1, 2, 3, 64, 64]);
+    assert_eq!(prediction_diff(&p, &loaded.forward(&t).unwrap()), 0.0);
+    (config, (t, p))
+}
+
 #[test]
 fn a_narrow_image_decoder_is_saved_with_its_filters() {
     let device = device();
@@ -367,12 +382,8 @@ fn a_narrow_image_decoder_is_saved_with_its_filters() {
         bytes.len(),
         full.len()
     );
-    let (loaded, _, config) = load_bytes(&bytes, &device).unwrap();
+    let (config, _) = reads_back_exactly(&model, &bytes, &device);
     assert_eq!(config.decoder_filters, Some(narrow));
-    let t = tensors(&batch(1, 2, 2, 64, 8), &device).unwrap();
-    let p = model.forward(&t).unwrap();
-    assert_eq!(p.image_mean.dims(), [1, 2, 3, 64, 64]);
-    assert_eq!(prediction_diff(&p, &loaded.forward(&t).unwrap()), 0.0);
     // A header whose filters do not describe the weights is refused, as are filters that
     // do not fit the frame size.
     let (header, weights) = parts(&bytes);
@@ -392,6 +403,28 @@ fn a_narrow_image_decoder_is_saved_with_its_filters() {
             e => panic!("decoder_filters {value}: {e}"),
         }
     }
+}
+
+#[test]
+fn a_coarse_tail_is_saved_with_the_model_and_decodes_full_size_frames() {
+    let device = device();
+    let filters = Some(vec![128, 64, 32, 32, 16, 16, 8]);
+    let fine = ModelConfig::new(ModelKind::Attn).with_decoder_filters(filters);
+    let coarse = fine.clone().with_coarse_tail(Some(true));
+    let model = init(coarse, &device);
+    let bytes = save_bytes(&model, &Normalization::identity(), false).unwrap();
+    let (config, (t, p)) = reads_back_exactly(&model, &bytes, &device);
+    assert_eq!(config.coarse_tail, Some(true));
+    // The same weights read as a fine tail (the header's flag dropped) decode other frames:
+    // the flag is what the file's reader goes by.
+    let (mut header, weights) = parts(&bytes);
+    header["config"]
+        .as_object_mut()
+        .unwrap()
+        .remove("coarse_tail");
+    let (as_fine, _, config) = load_bytes(&assemble(&header, &weights), &device).unwrap();
+    assert_eq!(config.coarse_tail, None);
+    assert!(prediction_diff(&p, &as_fine.forward(&t).unwrap()) > 1e-4);
 }
 
 /// Rebuilds a file from a header and a weight section (the checksum and length follow the

@@ -27,6 +27,9 @@ pub struct DecoderConfig {
     /// A gated image decoder (see [`ImageDecoder`]): the attentive model's.
     #[config(default = false)]
     pub gated: bool,
+    /// The image decoder's tail at half resolution (see [`ImageDecoderConfig::coarse_tail`]).
+    #[config(default = false)]
+    pub image_coarse_tail: bool,
 }
 
 /// Both decoders behind their shared Dense 1024 + ReLU layer: one target's conditioned
@@ -51,6 +54,7 @@ impl DecoderConfig {
                 .with_input(self.shared)
                 .with_sigma_floor(self.sigma_floor)
                 .with_gated(self.gated)
+                .with_coarse_tail(self.image_coarse_tail)
                 .init(device),
             joint: JointDecoderConfig::new()
                 .with_input(self.shared)

@@ -39,6 +39,7 @@ impl Dmbn {
             joint_encoder: JointEncoderConfig::new(8).with_hidden(hidden).init(device),
             decoder: DecoderConfig::new(hidden + 1, blocks)
                 .with_image_tail(tail)
+                .with_image_coarse_tail(config.coarse_tail == Some(true))
                 .with_sigma_floor(config.sigma_floor)
                 .init(device),
         })

@@ -91,6 +91,7 @@ impl DmbnAttn {
             decoder: starting_at_the_observations(
                 DecoderConfig::new(hidden, blocks)
                     .with_image_tail(tail)
+                    .with_image_coarse_tail(config.coarse_tail == Some(true))
                     .with_sigma_floor(config.sigma_floor)
                     .with_gated(true)
                     .init(device),

@@ -55,6 +55,7 @@ impl DmbnPte {
             joint_projection,
             decoder: DecoderConfig::new(config.hidden, blocks)
                 .with_image_tail(tail)
+                .with_image_coarse_tail(config.coarse_tail == Some(true))
                 .with_sigma_floor(config.sigma_floor)
                 .init(device),
         })

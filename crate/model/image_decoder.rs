@@ -1,13 +1,13 @@
 use burn::config::Config;
 use burn::module::{Module, Param};
 use burn::nn::conv::Conv2d;
-use burn::tensor::activation::sigmoid;
-use burn::tensor::{Device, Tensor};
+use burn::tensor::{Device, Tensor, TensorData};
 
-use super::gaussian::bounded_sigma;
 use super::init::conv3x3;
-use super::kernels::{Activation, KernelCache};
+use super::kernels::FeatureMap;
+use super::kernels::{heads, Activation, KernelCache, StartValues};
 use super::maps::Maps;
+use super::values;
 use super::FrameStart;
 
 /// The gate head's starting bias: σ(0) = 1/2 away from the observations, so that the drawn
@@ -37,11 +37,17 @@ pub struct ImageDecoderConfig {
     /// it is given to start from, pixel by pixel.
     #[config(default = false)]
     pub gated: bool,
+    /// The tail at half resolution: the last block's output is not upsampled, the heads read
+    /// the tail's upsampled (the 64x64 work is then only the heads': see
+    /// `ModelConfig::coarse_tail`).
+    #[config(default = false)]
+    pub coarse_tail: bool,
 }
 
 /// The image decoder: reshape to 2x2, blocks of Conv 3x3 + ReLU + nearest UpSampling x2,
-/// Conv 16 + ReLU, Conv 8 + ReLU (the original's tail), then two 3-channel 3x3 heads: the mean (through a sigmoid,
-/// since pixels lie in [0, 1]) and σ (see [`bounded_sigma`]); gated, a 1-channel gate head g
+/// Conv 16 + ReLU, Conv 8 + ReLU (the original's tail; with `coarse_tail` before the last
+/// upsampling), then two 3-channel 3x3 heads: the mean (through a sigmoid,
+/// since pixels lie in [0, 1]) and σ (see [`crate::model::bounded_sigma`]); gated, a 1-channel gate head g
 /// too, and the mean is g·start + (1 − g)·its own with g = n + (1 − n)·σ(gate), n the
 /// start's nearness to an observation (g = 1 at an observed step, 0 where the start is not
 /// observed): copy what stays as observed, draw what moved.
@@ -59,6 +65,8 @@ pub struct ImageDecoder {
     pub gate: Option<Conv2d>,
     /// Lower bound of σ.
     pub sigma_floor: f64,
+    /// The tail runs at half resolution and the heads read it upsampled.
+    pub coarse_tail: bool,
     /// The inference kernels prepared from the convolutions above.
     #[module(skip)]
     pub(crate) kernels: KernelCache,
@@ -104,6 +112,7 @@ impl ImageDecoderConfig {
                 gate
             }),
             sigma_floor: self.sigma_floor,
+            coarse_tail: self.coarse_tail,
             kernels: KernelCache::default(),
         }
     }
@@ -126,8 +135,45 @@ impl ImageDecoder {
         // All heads in one product.
         let slot = self.blocks.len() + self.tail.len();
         let heads = self.head_convs();
-        let raw = maps.conv3x3(slot, &heads, false, Activation::Identity, &self.kernels);
-        self.heads(raw.into_channels_first(&self.head_channels()), start)
+        let raw = maps.conv3x3(
+            slot,
+            &heads,
+            self.coarse_tail,
+            Activation::Identity,
+            &self.kernels,
+        );
+        match raw {
+            Maps::Inference(map, device) => self.fused_heads(&map, start, &device),
+            #[cfg(not(target_arch = "wasm32"))]
+            training => self.heads(training.into_channels_first(&self.head_channels()), start),
+        }
+    }
+
+    /// [`Self::heads`] at inference, in one pass over the raw outputs (see `kernels::heads`).
+    fn fused_heads(
+        &self,
+        raw: &FeatureMap,
+        start: Option<FrameStart>,
+        device: &Device,
+    ) -> DecodedFrames {
+        let [k, h, w, _] = raw.shape;
+        let start = start.map(|s| StartValues {
+            frames: values(s.frames),
+            observed: values(s.observed),
+            near: values(s.near),
+        });
+        let out = heads(
+            &raw.data,
+            raw.shape,
+            self.sigma_floor as f32,
+            start.as_ref(),
+        );
+        let frames = |v| Tensor::from_data(TensorData::new(v, [k, 3, h, w]), device);
+        DecodedFrames {
+            mean: frames(out.mean),
+            sigma: frames(out.sigma),
+            drawn: out.drawn.map(frames),
+        }
     }
 
     /// The heads, in the order of their raw outputs: mean, σ, gate.
@@ -139,6 +185,7 @@ impl ImageDecoder {
     }
 
     /// Channels of each head.
+    #[cfg(not(target_arch = "wasm32"))]
     fn head_channels(&self) -> Vec<usize> {
         [3, 3]
             .into_iter()
@@ -147,14 +194,19 @@ impl ImageDecoder {
     }
 
     /// Whether the convolution of layer `i` (blocks, then tail) reads its input upsampled: every
-    /// block's output is.
+    /// block's output is, but the last one's with a coarse tail (the heads read the tail's).
     fn upsampled(&self, i: usize) -> bool {
-        i > 0 && i <= self.blocks.len()
+        let last = self.blocks.len() - usize::from(self.coarse_tail);
+        i > 0 && i <= last
     }
 
     /// The heads' raw outputs to the mean (sigmoid, mixed with the start by a gated decoder)
     /// and σ frames. A start without a gate, or a gate without a start, leaves the mean alone.
+    /// (The training paths': inference runs [`Self::fused_heads`], the same in one pass.)
+    #[cfg(not(target_arch = "wasm32"))]
     fn heads(&self, raw: Vec<Tensor<4>>, start: Option<FrameStart>) -> DecodedFrames {
+        use super::gaussian::bounded_sigma;
+        use burn::tensor::activation::sigmoid;
         let mut raw = raw.into_iter();
         let drawn = sigmoid(raw.next().expect("the mean head"));
         let sigma = bounded_sigma(raw.next().expect("the σ head"), self.sigma_floor);
@@ -200,6 +252,17 @@ mod tests {
             .init(device)
     }
 
+    /// The decoder, and the same weights with the tail at half resolution.
+    fn both_tails(device: &Device) -> [ImageDecoder; 2] {
+        let fine = decoder(device);
+        let coarse = ImageDecoder {
+            coarse_tail: true,
+            kernels: KernelCache::default(),
+            ..fine.clone()
+        };
+        [fine, coarse]
+    }
+
     #[test]
     fn upsample2_repeats_each_pixel() {
         let device = Device::flex();
@@ -221,11 +284,18 @@ mod tests {
         use burn::tensor::activation::relu;
         let [k, width] = x.dims();
         let mut x = x.reshape([k, width / 4, 2, 2]);
-        for conv in &decoder.blocks {
-            x = upsample2(relu(conv.forward(x)));
+        let last = decoder.blocks.len() - 1;
+        for (i, conv) in decoder.blocks.iter().enumerate() {
+            x = relu(conv.forward(x));
+            if i < last || !decoder.coarse_tail {
+                x = upsample2(x);
+            }
         }
         for conv in &decoder.tail {
             x = relu(conv.forward(x));
+        }
+        if decoder.coarse_tail {
+            x = upsample2(x);
         }
         decoder
             .head_convs()
@@ -249,13 +319,25 @@ mod tests {
     #[test]
     fn inference_equals_burns_layers() {
         let device = Device::flex();
-        let decoder = decoder(&device);
         let x = Tensor::<2>::random([3, 64], Distribution::Normal(0.0, 1.0), &device);
-        let (mean, sigma) = reference(&decoder, x.clone());
-        let (fast_mean, fast_sigma) = fast(&decoder, x);
-        assert_eq!(mean.dims(), [3, 3, 16, 16]);
-        assert!(diff(mean, fast_mean) < 1e-5);
-        assert!(diff(sigma, fast_sigma) < 1e-5);
+        let [fine, coarse] = both_tails(&device);
+        for decoder in [&fine, &coarse] {
+            let (mean, sigma) = reference(decoder, x.clone());
+            let (fast_mean, fast_sigma) = fast(decoder, x.clone());
+            assert_eq!(mean.dims(), [3, 3, 16, 16]);
+            assert!(diff(mean, fast_mean) < 1e-5);
+            assert!(diff(sigma, fast_sigma) < 1e-5);
+        }
+        // A coarse tail draws the same frame size from the same weights, differently: its
+        // tail's every output covers 2x2 pixels, which the heads' phases tell apart.
+        let (fine_mean, _) = fast(&fine, x.clone());
+        let (coarse_mean, _) = fast(&coarse, x);
+        assert!(diff(fine_mean, coarse_mean.clone()) > 1e-3);
+        let m: Vec<f32> = coarse_mean.into_data().try_to_vec().unwrap();
+        assert_ne!(
+            m[0], m[1],
+            "the heads read the upsampled tail per output phase"
+        );
     }
 
     #[test]
@@ -313,11 +395,15 @@ mod tests {
     #[test]
     fn training_equals_burns_layers_in_values_and_gradients() {
         let device = Device::flex().autodiff();
-        let decoder = decoder(&device);
-        let x =
-            Tensor::<2>::random([2, 64], Distribution::Normal(0.0, 1.0), &device).require_grad();
-        let (mean, sigma) = fast(&decoder, x.clone());
-        let (ref_mean, ref_sigma) = reference(&decoder, x.clone());
+        for decoder in both_tails(&device) {
+            training_equals_burns_layers(&decoder, &device);
+        }
+    }
+
+    fn training_equals_burns_layers(decoder: &ImageDecoder, device: &Device) {
+        let x = Tensor::<2>::random([2, 64], Distribution::Normal(0.0, 1.0), device).require_grad();
+        let (mean, sigma) = fast(decoder, x.clone());
+        let (ref_mean, ref_sigma) = reference(decoder, x.clone());
         assert!(diff(mean.clone().inner(), ref_mean.clone().inner()) < 1e-5);
         assert!(diff(sigma.clone().inner(), ref_sigma.clone().inner()) < 1e-5);
         // Weighted sums, so that every gradient differs from pixel to pixel.

@@ -96,8 +96,17 @@ impl SequencePrediction {
             (image_mean, &mut self.image_mean),
             (image_sigma, &mut self.image_sigma),
         ] {
-            for frame in source.chunks_exact(3 * plane) {
-                out.extend((0..plane).flat_map(|p| (0..3).map(move |c| frame[c * plane + p])));
+            // Channels-first to channels-last, into room made first (an indexed loop: an
+            // iterator-fed extend costs as much as the heads that computed the values).
+            let first = out.len();
+            out.resize(first + source.len(), 0.0);
+            let frames = source.chunks_exact(3 * plane);
+            for (frame, dst) in frames.zip(out[first..].chunks_exact_mut(3 * plane)) {
+                for (c, channel) in frame.chunks_exact(plane).enumerate() {
+                    for (p, &v) in channel.iter().enumerate() {
+                        dst[3 * p + c] = v;
+                    }
+                }
             }
         }
         for (mean, sigma) in joint_mean

@@ -57,12 +57,13 @@ export const errorText = (page) => page.locator("#error").textContent();
 
 /** Waits for `wanted`; fails at once, with the page's message, when the page shows an error instead. */
 export async function waitState(page, wanted) {
-  await page.waitForFunction(
-    (w) => document.body.dataset.state === w || document.body.dataset.state === "error",
+  // The state that ended the wait, not one read after it: live mode's playback moves on.
+  const reached = await page.waitForFunction(
+    (w) => [w, "error"].includes(document.body.dataset.state) && document.body.dataset.state,
     wanted,
     { timeout: TIMEOUT },
   );
-  const now = await state(page);
+  const now = await reached.jsonValue();
   if (now !== wanted) assert.fail(`expected state ${wanted}, got ${now}: ${await errorText(page)}`);
 }
 

@@ -15,6 +15,7 @@ mod cache;
 mod feature_map;
 #[cfg(not(target_arch = "wasm32"))]
 mod gradient;
+mod heads;
 mod matmul;
 mod patches;
 mod plan;
@@ -22,6 +23,7 @@ mod pool;
 
 pub(crate) use cache::KernelCache;
 pub(crate) use feature_map::{Activation, FeatureMap};
+pub(crate) use heads::{heads, StartValues};
 #[cfg(not(target_arch = "wasm32"))]
 pub(crate) use plan::Kernels;
 #[cfg(not(target_arch = "wasm32"))]
