@@ -60,15 +60,17 @@ stage() {
 }
 
 # The shipped weights' recipe (docs/results.md, "How the shipped weights were trained"): the
-# first 3,000 steps at lr 1e-3, then, on the simulator, the paper's networks trained longer
-# from the previous stage's model.dmbn at lr 5e-4.
+# first 3,000 steps at lr 1e-3, then, on the simulator, every network trained longer from the
+# previous stage's model.dmbn at lr 5e-4.
 if [ "${TRAIN:-0}" = 1 ]; then
   first=(--steps "$steps" --seed 1 --lr 1e-3)
   longer=(--lr 5e-4 --beta-nll 1)
   for m in "${models[@]}"; do
     case $set_name/$m in
-      sim/attn) stage attn "${first[@]}" --model attn --beta-nll 1 --decoder-filters 128,64,32,32,16,16,8 --coarse-tail
-        file[$m]=$out/runs/attn/best.dmbn ;;
+      sim/attn) stage attn "${first[@]}" --model attn --beta-nll 1 --encoder-filters 16,32,64,64,128 \
+          --decoder-filters 128,64,32,32,16,16,8 --coarse-tail
+        stage attn-2 "${longer[@]}" --init "$out/runs/attn/model.dmbn" --steps 2000 --seed 2
+        file[$m]=$out/runs/attn-2/best.dmbn ;;
       sim/pte) stage pte "${first[@]}" --model pte --beta-nll 1
         stage pte-2 "${longer[@]}" --init "$out/runs/pte/model.dmbn" --steps 3000 --seed 2
         file[$m]=$out/runs/pte-2/model.dmbn ;;

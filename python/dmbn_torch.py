@@ -49,6 +49,11 @@ MASKED_SCORE = -1.0e4
 CHUNK = 25
 
 
+def image_encoder_filters(config):
+    """The image encoder's filters: the header's `encoder_filters` or the original's."""
+    return config.get("encoder_filters") or ENCODER_FILTERS[config["image_size"]]
+
+
 def image_decoder_shape(config):
     """The image decoder's (blocks, tail, coarse_tail): the header's `decoder_filters` (blocks,
     then the two tail convolutions) or the original's, and whether the tail runs at half
@@ -285,8 +290,8 @@ class Dmbn(nn.Module):
 
     def __init__(self, config):
         super().__init__()
-        s, h = config["image_size"], config["hidden"]
-        self.image_encoder = ImageEncoder(4, ENCODER_FILTERS[s], h)
+        h = config["hidden"]
+        self.image_encoder = ImageEncoder(4, image_encoder_filters(config), h)
         self.joint_encoder = JointEncoder(8, h)
         self.decoder = Decoder(h + 1, image_decoder_shape(config), config["sigma_floor"])
 
@@ -308,8 +313,8 @@ class _PteEncoders(nn.Module):
     """DMBN-PTE's context encoding z_m = g_m(e_m(x) + P(t)), shared with the attentive model."""
 
     def _pte_init(self, config):
-        s, h = config["image_size"], config["hidden"]
-        self.image_encoder = ImageEncoder(3, ENCODER_FILTERS[s], h)
+        h = config["hidden"]
+        self.image_encoder = ImageEncoder(3, image_encoder_filters(config), h)
         self.joint_encoder = JointEncoder(7, h)
         self.time = TimeProjection(h)
         self.image_projection = ContextProjection(h)

@@ -74,7 +74,8 @@ fn export_uses_pytorch_names_layouts_and_metadata() {
     // Linear [out, in], Conv2d [out, in, kh, kw], LayerNorm weight/bias.
     assert_eq!(shape("decoder.shared.weight"), [1024, 128]);
     assert_eq!(shape("joint_encoder.layers.0.weight"), [32, 7]);
-    assert_eq!(shape("image_encoder.convs.0.weight"), [32, 3, 3, 3]);
+    // (The shipped file's image encoder has half the original's filters: 16, not 32.)
+    assert_eq!(shape("image_encoder.convs.0.weight"), [16, 3, 3, 3]);
     assert_eq!(shape("image_projection.norm.weight"), [128]);
     assert_eq!(shape("image_projection.norm.bias"), [128]);
     assert_eq!(shape("image_attention.query.weight"), [128, 128]);

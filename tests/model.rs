@@ -369,10 +369,13 @@ fn reads_back_exactly(
 }
 
 #[test]
-fn a_narrow_image_decoder_is_saved_with_its_filters() {
+fn narrow_image_networks_are_saved_with_their_filters() {
     let device = device();
     let narrow = vec![128, 64, 32, 32, 16, 8, 8];
-    let config = ModelConfig::new(ModelKind::Attn).with_decoder_filters(Some(narrow.clone()));
+    let encoder = vec![16, 32, 64, 64, 128];
+    let config = ModelConfig::new(ModelKind::Attn)
+        .with_decoder_filters(Some(narrow.clone()))
+        .with_encoder_filters(Some(encoder.clone()));
     let model = init(config, &device);
     let bytes = save_bytes(&model, &Normalization::identity(), false).unwrap();
     let (_, full, _) = saved(ModelKind::Attn, false);
@@ -384,23 +387,33 @@ fn a_narrow_image_decoder_is_saved_with_its_filters() {
     );
     let (config, _) = reads_back_exactly(&model, &bytes, &device);
     assert_eq!(config.decoder_filters, Some(narrow));
+    assert_eq!(config.encoder_filters, Some(encoder));
     // A header whose filters do not describe the weights is refused, as are filters that
     // do not fit the frame size.
     let (header, weights) = parts(&bytes);
-    for (value, config_error) in [
-        (serde_json::Value::Null, false),
-        (serde_json::json!([128, 64, 32, 32, 16, 16, 8]), false),
-        (serde_json::json!([128, 64, 32]), true),
+    for (field, value, config_error) in [
+        ("decoder_filters", serde_json::Value::Null, false),
+        (
+            "decoder_filters",
+            serde_json::json!([128, 64, 32, 32, 16, 16, 8]),
+            false,
+        ),
+        ("decoder_filters", serde_json::json!([128, 64, 32]), true),
+        ("encoder_filters", serde_json::Value::Null, false),
+        (
+            "encoder_filters",
+            serde_json::json!([16, 32, 64, 64, 64]),
+            false,
+        ),
+        ("encoder_filters", serde_json::json!([16, 32, 64]), true),
     ] {
         let mut header = header.clone();
-        header["config"]["decoder_filters"] = value.clone();
+        header["config"][field] = value.clone();
         let err = load_err(&assemble(&header, &weights));
         match err {
-            ModelError::Config { field, .. } if config_error => {
-                assert_eq!(field, "decoder_filters")
-            }
+            ModelError::Config { field: f, .. } if config_error => assert_eq!(f, field),
             ModelError::Weights(_) if !config_error => {}
-            e => panic!("decoder_filters {value}: {e}"),
+            e => panic!("{field} {value}: {e}"),
         }
     }
 }

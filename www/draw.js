@@ -29,6 +29,12 @@ export function renderSoon() {
   });
 }
 
+/** The step whose prediction is drawn: the current one, or in live mode the forecast some steps ahead of it. */
+export function shownStep() {
+  const { shown, step } = state;
+  return shown.mode === "live" ? Math.min(shown.len - 1, step + clampInt(ui.ahead.value, 1, 100)) : step;
+}
+
 export function render() {
   drawSoon = false;
   const { shown, prediction: p, step } = state;
@@ -37,8 +43,7 @@ export function render() {
     return;
   }
   const live = shown.mode === "live";
-  // Live mode shows the forecast some steps ahead of the current (seen) step.
-  const at = live ? Math.min(shown.len - 1, step + clampInt(ui.ahead.value, 1, 100)) : step;
+  const at = shownStep();
   const has = p && p.done[at];
   const trueFrame = ui.frameTrue.getContext("2d");
   trueFrame.putImageData(shown.images[step], 0, 0);

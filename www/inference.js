@@ -103,7 +103,7 @@ export class Inference {
    * gets each chunk (`start` a step index of `targets`) as it arrives (with `firstAlone`, the
    * first target comes alone first, sooner). With `source` (a name of the sequence) and `steps` (each observation's step),
    * the workers keep the encoded steps and encode only those they lack. Returns {done, cancel}:
-   * `done` resolves with {type: "done" | "cancelled", encodeMs, decodeMs, encoded, workers} (the
+   * `done` resolves with {type: "done" | "cancelled", ms, encodeMs, decodeMs, encoded, workers} (the
    * slowest worker's times, the most observations a worker encoded) or rejects with the first
    * failure.
    */
@@ -132,6 +132,7 @@ export class Inference {
     const done = Promise.all(requests.map((r) => r.done)).then(
       (replies) => ({
         type: replies.some((r) => r.type === "cancelled") ? "cancelled" : "done",
+        ms: Math.max(...replies.map((r) => r.ms ?? 0)),
         encodeMs: Math.max(...replies.map((r) => r.encodeMs ?? 0)),
         decodeMs: Math.max(...replies.map((r) => (r.ms ?? 0) - (r.encodeMs ?? 0))),
         encoded: Math.max(...replies.map((r) => r.encoded ?? 0)),

@@ -3,7 +3,7 @@
 // finished forecast's error joins the live error plot.
 
 import { BLENDS, CHUNK, MODEL_NAMES } from "./config.js";
-import { render } from "./draw.js";
+import { render, shownStep } from "./draw.js";
 import { drawErrors } from "./error_plot.js";
 import { loadModel } from "./models.js";
 import { clampInt, updateObsInfo } from "./observations.js";
@@ -65,7 +65,8 @@ export function forecastNow(step = state.step) {
   document.body.dataset.seen = String(from);
   // Everything observed: the last forecast stays on screen.
   if (from >= shown.len) return render();
-  predict({ from, chunk: CHUNK, firstAlone: true, keepEncoded: true });
+  // The step on screen (some steps ahead) is decoded first, alone.
+  predict({ from, chunk: CHUNK, first: shownStep(), keepEncoded: true });
 }
 
 /** The error curves of the episode on screen under the current rule and modalities. */
@@ -122,7 +123,9 @@ export function forecastDone(p) {
     // From the observation coming in: to the first chunk drawn, and to the whole forecast.
     first_chunk_ms: p.firstAt - p.asked,
     total_ms: performance.now() - p.asked,
-    // Of which the slowest worker's encoding of the observations it lacked (`encoded` of them).
+    // Of which the slowest worker's whole time, and its encoding of the observations it
+    // lacked (`encoded` of them); the rest is the page's (messages, drawing).
+    worker_ms: p.workerMs,
     encode_ms: p.encodeMs,
     encoded: p.encoded,
     joint_rmse: error.joint_rmse,

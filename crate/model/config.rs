@@ -102,13 +102,17 @@ pub struct ModelConfig {
     /// the last upsampling, and only the heads at full resolution (9.8 M multiply-adds a 64x64
     /// frame instead of 16 M at the half-width filters). Absent (older files) or false: the original's.
     pub coarse_tail: Option<bool>,
+    /// Filters of the image encoder's conv blocks, one per block. Absent: the original's (see
+    /// [`encoder_filters`]); a narrower encoder encodes an observation with fewer
+    /// multiply-adds (live mode encodes each new one before it forecasts).
+    pub encoder_filters: Option<Vec<usize>>,
 }
 
 impl ModelConfig {
     /// Checks every field: a supported image size, a non-zero hidden size, a σ floor in
     /// [0, 1) and a finite, non-negative joint weight.
     pub fn validate(&self) -> Result<(), ModelError> {
-        encoder_filters(self.image_size)?;
+        self.image_encoder()?;
         if self.hidden == 0 {
             return Err(ModelError::config("hidden", "is 0: expected at least 1"));
         }
@@ -154,6 +158,26 @@ impl ModelConfig {
         }
         let (blocks, tail) = filters.split_at(blocks.len());
         Ok((blocks.to_vec(), tail.to_vec()))
+    }
+
+    /// The image encoder's filters: `encoder_filters`, or the original's ([`encoder_filters`]).
+    pub fn image_encoder(&self) -> Result<Vec<usize>, ModelError> {
+        let original = encoder_filters(self.image_size)?;
+        let Some(filters) = &self.encoder_filters else {
+            return Ok(original);
+        };
+        if filters.len() != original.len() || filters.contains(&0) {
+            return Err(ModelError::config(
+                "encoder_filters",
+                format!(
+                    "is {filters:?}: expected {} filter counts above 0 for {size}x{size} frames \
+                     (one per conv block, each halving the frame down to 2x2)",
+                    original.len(),
+                    size = self.image_size,
+                ),
+            ));
+        }
+        Ok(filters.clone())
     }
 
     /// Heads of the attentive model's attention: `heads`, `ATTENTION_HEADS` (8) by default.
@@ -260,6 +284,19 @@ mod tests {
             err.contains("decoder_filters") && err.contains("expected 7"),
             "{err}"
         );
+        let encoder = |filters: Vec<usize>| {
+            ModelConfig::new(ModelKind::Pte)
+                .with_encoder_filters(Some(filters))
+                .validate()
+        };
+        assert!(encoder(vec![16, 32, 64, 64, 128]).is_ok());
+        for bad in [vec![16, 32, 64], vec![16, 32, 0, 64, 128]] {
+            let err = encoder(bad).unwrap_err().to_string();
+            assert!(
+                err.contains("encoder_filters") && err.contains("expected 5"),
+                "{err}"
+            );
+        }
         assert!(narrow(vec![128, 64, 32, 32, 16, 16, 0]).is_err());
         assert!(narrow(vec![128, 64, 32, 32, 16, 16, 8]).is_ok());
     }

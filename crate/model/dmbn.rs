@@ -1,7 +1,6 @@
 use burn::module::Module;
 use burn::tensor::{Device, Tensor};
 
-use super::config::encoder_filters;
 use super::decoder::{Decoder, DecoderConfig};
 use super::image_encoder::{ImageEncoder, ImageEncoderConfig};
 use super::joint_encoder::{JointEncoder, JointEncoderConfig};
@@ -33,7 +32,7 @@ impl Dmbn {
         let hidden = config.hidden;
         let (blocks, tail) = config.image_decoder()?;
         Ok(Dmbn {
-            image_encoder: ImageEncoderConfig::new(4, encoder_filters(config.image_size)?)
+            image_encoder: ImageEncoderConfig::new(4, config.image_encoder()?)
                 .with_hidden(hidden)
                 .init(device),
             joint_encoder: JointEncoderConfig::new(8).with_hidden(hidden).init(device),

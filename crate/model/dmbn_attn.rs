@@ -75,7 +75,7 @@ impl DmbnAttn {
             time,
             image_projection,
             joint_projection,
-        } = pte_encoders(config.image_size, hidden, device)?;
+        } = pte_encoders(config, device)?;
         let attention = MultiHeadAttentionConfig::new(hidden, heads).with_dropout(0.0);
         Ok(DmbnAttn {
             image_encoder,

@@ -1,7 +1,6 @@
 use burn::module::Module;
 use burn::tensor::{Device, Tensor};
 
-use super::config::encoder_filters;
 use super::context_projection::{ContextProjection, ContextProjectionConfig};
 use super::decoder::{Decoder, DecoderConfig};
 use super::image_encoder::{ImageEncoder, ImageEncoderConfig};
@@ -46,7 +45,7 @@ impl DmbnPte {
             time,
             image_projection,
             joint_projection,
-        } = pte_encoders(config.image_size, config.hidden, device)?;
+        } = pte_encoders(config, device)?;
         Ok(DmbnPte {
             image_encoder,
             joint_encoder,
@@ -108,16 +107,16 @@ pub(super) struct PteEncoders {
     pub joint_projection: ContextProjection,
 }
 
-/// Builds [`PteEncoders`] for `image_size` frames and H = `hidden`; fails on an unsupported
-/// image size.
+/// Builds [`PteEncoders`] for the config's frames, image encoder and H; fails on an
+/// unsupported image size or encoder.
 pub(super) fn pte_encoders(
-    image_size: usize,
-    hidden: usize,
+    config: &ModelConfig,
     device: &Device,
 ) -> Result<PteEncoders, ModelError> {
+    let hidden = config.hidden;
     let projection = ContextProjectionConfig::new().with_hidden(hidden);
     Ok(PteEncoders {
-        image_encoder: ImageEncoderConfig::new(3, encoder_filters(image_size)?)
+        image_encoder: ImageEncoderConfig::new(3, config.image_encoder()?)
             .with_hidden(hidden)
             .init(device),
         joint_encoder: JointEncoderConfig::new(7).with_hidden(hidden).init(device),

@@ -83,6 +83,11 @@ struct Args {
     /// instead of 16 M with the half-width filters; the page's live mode).
     #[arg(long, conflicts_with_all = ["resume", "init"])]
     coarse_tail: bool,
+    /// Filters of the image encoder's conv blocks, comma-separated, one per block (the
+    /// original's at 64 px: 32,64,128,128,256). Fewer filters encode an observation with
+    /// fewer multiply-adds (live mode encodes each new one before it forecasts).
+    #[arg(long, value_delimiter = ',', conflicts_with_all = ["resume", "init"])]
+    encoder_filters: Option<Vec<usize>>,
     /// Base learning rate (Adam).
     #[arg(long, default_value_t = defaults().lr)]
     lr: f64,
@@ -214,6 +219,7 @@ fn run(args: Args) -> Result<(), TrainError> {
                     .with_sigma_floor(args.sigma_floor)
                     .with_decoder_filters(args.decoder_filters.clone())
                     .with_coarse_tail(args.coarse_tail.then_some(true))
+                    .with_encoder_filters(args.encoder_filters.clone())
             })
             .with_joint_weight(args.joint_weight);
         let mut config = TrainConfig::new(model, steps, args.seed);
