@@ -6,7 +6,7 @@ export const IMAGE_SIZE = 64;
 export const STEPS_PER_SECOND = 20;
 /**
  * Target times per predict call: the sequence fills in by this many steps at a time (live mode
- * too: its first step comes alone, and smaller chunks only add round trips).
+ * too: the step shown ahead comes alone first, and smaller chunks only add round trips).
  */
 export const CHUNK = 10;
 export const BLENDS = { images: 1, joints: 0, both: 0.5 };
