@@ -1,6 +1,6 @@
 // Drawing the current step: true and predicted frames, σ map, timeline, joint plot, table map.
 
-import { follow, redrawErrors } from "./live.js";
+import { follow, heldForecast, redrawErrors } from "./live.js";
 import { clampInt, observedSteps } from "./observations.js";
 import { drawJoints } from "./plot.js";
 import { firstDrawn } from "./prediction.js";
@@ -17,15 +17,24 @@ export function show(k) {
   render();
 }
 
-/** Whether a draw waits for the next animation frame. */
-let drawSoon = false;
+/** What waits for the next animation frame: nothing, the frames alone, or everything. */
+let drawSoon = null;
 
-/** Draws at the next animation frame: once, however many chunks arrive before it. */
-export function renderSoon() {
-  if (drawSoon) return;
-  drawSoon = true;
+/**
+ * Draws at the next animation frame: once, however many chunks arrive before it. `framesOnly`:
+ * only the frames (true, predicted, ghost, σ) need it, as for a live forecast's first chunk
+ * (the panels keep the last finished forecast until this one finishes); each canvas redrawn
+ * is main-thread and compositor time that the workers lack on 2 cores.
+ */
+export function renderSoon({ framesOnly = false } = {}) {
+  const pending = drawSoon;
+  drawSoon = framesOnly && pending !== "all" ? "frames" : "all";
+  if (pending) return;
   requestAnimationFrame(() => {
-    if (drawSoon) render();
+    if (drawSoon === "frames") {
+      drawFrames();
+      if (state.prediction?.count) firstDrawn(state.prediction);
+    } else if (drawSoon) render();
   });
 }
 
@@ -36,12 +45,42 @@ export function shownStep() {
 }
 
 export function render() {
-  drawSoon = false;
   const { shown, prediction: p, step } = state;
   if (!shown) {
+    drawSoon = null;
     drawJoints(ui.plot, ui.plotCursor, null);
     return;
   }
+  drawFrames();
+  const live = shown.mode === "live";
+  // Live mode's panels show the last finished forecast until the next one finishes.
+  const panels = live ? heldForecast() : p;
+  ui.counter.textContent = `step ${step} / ${shown.len - 1} · t = ${shown.times[step].toFixed(3)}`;
+  ui.trueLabel.textContent = shown.mode === "t" ? "" : `mode ${shown.mode}`;
+  state.timelineAt = drawTimeline(ui.timeline, {
+    len: shown.len,
+    size: shown.size,
+    sprite: shown.sprite,
+    observed: state.observed,
+    done: panels?.done,
+    step,
+  });
+  if (live) redrawErrors();
+  state.stepAt = drawJoints(ui.plot, ui.plotCursor, {
+    len: shown.len,
+    joints: shown.joints,
+    observed: (live && panels?.steps) || observedSteps(),
+    step,
+    prediction: panels,
+  });
+  if (p?.count) firstDrawn(p);
+}
+
+/** The true frame and the prediction of the step shown: predicted frame, ghost, σ map. */
+function drawFrames() {
+  drawSoon = null;
+  const { shown, prediction: p, step } = state;
+  if (!shown) return;
   const live = shown.mode === "live";
   const at = shownStep();
   const has = p && p.done[at];
@@ -53,7 +92,7 @@ export function render() {
     ui.framePred.getContext("2d").putImageData(mean, 0, 0);
     if (live && ui.ghost.checked) drawGhost(trueFrame, mean);
     const heat = state.wasm.heatMap(p.sigma.subarray(at * px, (at + 1) * px), p.maxSigma);
-    ui.sigmaMap.getContext("2d").putImageData(rgbImage(heat, p.size), 0, 0);
+    ui.sigmaMap.getContext("2d").putImageData(screenBlend(mean, heat), 0, 0);
     ui.sigmaScale.textContent = p.maxSigma.toFixed(3);
   } else {
     clearFrame(ui.framePred);
@@ -67,25 +106,6 @@ export function render() {
       ? "this step is not predicted yet"
       : "no prediction yet: choose observations, then Predict";
   if (live) ui.predLabel.textContent = has ? `forecast of step ${at}` : "";
-  ui.counter.textContent = `step ${step} / ${shown.len - 1} · t = ${shown.times[step].toFixed(3)}`;
-  ui.trueLabel.textContent = shown.mode === "t" ? "" : `mode ${shown.mode}`;
-  state.timelineAt = drawTimeline(ui.timeline, {
-    len: shown.len,
-    size: shown.size,
-    sprite: shown.sprite,
-    observed: state.observed,
-    done: p?.done,
-    step,
-  });
-  if (live) redrawErrors();
-  state.stepAt = drawJoints(ui.plot, ui.plotCursor, {
-    len: shown.len,
-    joints: shown.joints,
-    observed: observedSteps(),
-    step,
-    prediction: p,
-  });
-  if (p?.count) firstDrawn(p);
 }
 
 /** The forecast frame as a ghost over the true one: where the arm is going. */
@@ -98,6 +118,24 @@ function drawGhost(g, mean) {
   g.globalAlpha = 0.45;
   g.drawImage(ghost, 0, 0);
   g.restore();
+}
+
+/**
+ * The σ overlay as drawn over the predicted frame: its heat map screen-blended with `mean`
+ * (1 − (1 − m)(1 − h)), where σ is low the frame itself. Blended here, not by CSS
+ * `mix-blend-mode`, which makes the compositor draw the overlay in a pass of its own at every
+ * frame (on a 2-core machine, time the inference workers lack); the canvas's CSS opacity then
+ * mixes it with the frame as the blend mode did.
+ */
+function screenBlend(mean, heat) {
+  const out = new ImageData(mean.width, mean.height);
+  const m = mean.data;
+  const o = out.data;
+  for (let i = 0, j = 0; i < o.length; i += 4, j += 3) {
+    for (let c = 0; c < 3; c++) o[i + c] = 255 - ((255 - m[i + c]) * (255 - heat[j + c])) / 255;
+    o[i + 3] = 255;
+  }
+  return out;
 }
 
 export function drawTableMap() {

@@ -90,17 +90,24 @@ function record(model, from, error) {
 /** What the error plot was last drawn from: it is redrawn only when that changes. */
 let errorsDrawnFrom = "";
 
-/** Draws the error plot, the fraction of the action seen marked. */
+/** Draws the error plot, the fraction of the action seen by the forecast on screen marked. */
 export function redrawErrors() {
   const { shown } = state;
   if (!shown) return;
-  const now = shown.mode === "live" && state.observed.size ? (Math.max(...state.observed) + 1) / shown.len : null;
+  const forecast = heldForecast();
+  const now = forecast ? forecast.from / shown.len : null;
   const byModel = curves();
   const { w, h } = cssSize(ui.errorPlot);
   const key = [window.devicePixelRatio, w, h, state.curves.key, state.curves.version, now].join("|");
   if (key === errorsDrawnFrom) return;
   errorsDrawnFrom = key;
   drawErrors(ui.errorPlot, byModel, MODEL_NAMES, now);
+}
+
+/** Live mode: the last finished forecast of the sequence on screen (see `state.forecast`), or null. */
+export function heldForecast() {
+  const { shown, forecast } = state;
+  return shown?.mode === "live" && forecast?.sequence === shown ? forecast : null;
 }
 
 /** The benchmark's error of a forecast of the steps from `from` on (RGB bytes, joints). */
@@ -112,6 +119,7 @@ function forecastError(from, mean, jointMean) {
 
 /** A live forecast finished (prediction.js): its error, for the plot and for automation. */
 export function forecastDone(p) {
+  // Timed to its last chunk (p.doneAt): its error below is for the plot.
   const px = p.size * p.size * 3;
   const error = forecastError(p.from, p.mean.subarray(p.from * px), p.jointMean.subarray(p.from * JOINTS));
   record(p.model, p.from, error);
@@ -122,7 +130,7 @@ export function forecastDone(p) {
     observed: p.observed,
     // From the observation coming in: to the first chunk drawn, and to the whole forecast.
     first_chunk_ms: p.firstAt - p.asked,
-    total_ms: performance.now() - p.asked,
+    total_ms: p.doneAt - p.asked,
     // Of which the slowest worker's whole time, and its encoding of the observations it
     // lacked (`encoded` of them); the rest is the page's (messages, drawing).
     worker_ms: p.workerMs,

@@ -86,6 +86,9 @@ export async function predict({ from = 0, chunk = CHUNK, first = null, keepEncod
     order,
     size,
     observed: steps.length,
+    steps,
+    /** The sequence predicted (live mode: the forecast on screen is held while it is shown). */
+    sequence: shown,
     done: new Uint8Array(len),
     count: 0,
     mean: new Uint8Array(len * px * 3),
@@ -159,11 +162,9 @@ function receiveChunk(p, c) {
     renderSoon();
     return;
   }
-  // A live forecast (about 100 ms) shows no progress and is drawn at its first chunk and the
-  // step on screen (`first`, decoded alone first), then whole when complete (finish): each
-  // change of the page takes the main thread and the compositor, time that the workers lack
-  // on 2 cores (the page benchmark's 60-step remainder: 127-129 -> 105-116 ms).
-  if (p.count === c.count || shown) renderSoon();
+  // A live forecast (about 100 ms) shows no progress: its frames are drawn at its first chunk
+  // and the step on screen (`first`, decoded alone first), everything when complete (finish).
+  if (p.count === c.count || shown) renderSoon({ framesOnly: true });
 }
 
 /** The prediction's first steps are drawn (draw.js): when, for its timings. */
@@ -178,7 +179,9 @@ function finish(p, reply) {
   const { model, mode, observe, from } = p;
   const len = p.len - from;
   p.complete = true;
-  p.totalMs = performance.now() - p.start;
+  p.doneAt = performance.now();
+  if (mode === "live") state.forecast = p;
+  p.totalMs = p.doneAt - p.start;
   // Every chunk came before an animation frame drew one: the last ones are drawn below.
   firstDrawn(p);
   p.encodeMs = reply.encodeMs;

@@ -17,6 +17,13 @@ export const state = {
   pendingObserved: null,
   /** The prediction on screen (or filling in). */
   prediction: null,
+  /**
+   * Live mode: the last finished forecast, which the joint panels, the timeline's marks and the
+   * error plot show until the next one finishes (a forecast takes about 0.1 s: redrawing them
+   * for each new observation, then for its forecast, would flicker and take the main thread
+   * and compositor from the inference workers).
+   */
+  forecast: null,
   /** Live mode: the observation rule, every k-th step (taken from its field on change: live.js). */
   every: 10,
   /** Live mode: the seen observations the forecast on screen was made from ("0,5,10"). */

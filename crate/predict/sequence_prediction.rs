@@ -70,7 +70,11 @@ impl SequencePrediction {
     /// the common scale of its heat maps, the σ shown as full yellow by `dmbn predict`, the
     /// evaluation figure and the page (which takes the largest over its decoded chunks).
     pub fn max_image_sigma(&self) -> f32 {
-        self.pixel_sigma().into_iter().fold(0.0, f32::max)
+        // A comparison, not f32::max (in wasm a call of libm's fmaxf per pixel); NaN is passed
+        // over as f32::max does.
+        pixel_sigma(&self.image_sigma)
+            .into_iter()
+            .fold(0.0, |m, s| if s > m { s } else { m })
     }
 
     /// σ of frame `k` as an RGB heat map scaled so that `scale` is full yellow.
@@ -121,12 +125,19 @@ impl SequencePrediction {
     }
 }
 
-/// Values in [0, 1] (clamped) as bytes.
+/// Values in [0, 1] (clamped) as bytes, rounded half away from zero.
 fn rgb_bytes(values: &[f32]) -> Vec<u8> {
-    values
-        .iter()
-        .map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8)
-        .collect()
+    values.iter().map(|&v| byte(v)).collect()
+}
+
+/// `(v.clamp(0.0, 1.0) * 255.0).round() as u8` without `f32::round`, which wasm has no
+/// instruction for (each byte a call of libm's `roundf`): NaN and below 0 saturate to 0,
+/// above 1 to 255.
+#[inline(always)]
+fn byte(v: f32) -> u8 {
+    let x = v * 255.0;
+    let whole = x.trunc();
+    (if x - whole >= 0.5 { whole + 1.0 } else { whole }) as u8
 }
 
 #[cfg(test)]
@@ -151,5 +162,22 @@ mod tests {
         assert_eq!(p.mean_frames(), vec![0, 128, 255, 255, 0, 64]);
         assert_eq!(p.mean_frames()[3..], p.mean_frame(1));
         assert_eq!(SequencePrediction::empty(4).max_image_sigma(), 0.0);
+    }
+
+    #[test]
+    fn bytes_round_as_f32_round_does() {
+        for i in -1000..=300_000 {
+            let v = i as f32 / 256_000.0;
+            assert_eq!(byte(v), (v.clamp(0.0, 1.0) * 255.0).round() as u8, "{v}");
+        }
+        for v in [
+            f32::NAN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            0.5 / 255.0,
+            1.5 / 255.0,
+        ] {
+            assert_eq!(byte(v), (v.clamp(0.0, 1.0) * 255.0).round() as u8, "{v}");
+        }
     }
 }

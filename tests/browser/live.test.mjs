@@ -116,6 +116,26 @@ describe("live mode", () => {
     await close(page);
   });
 
+  test("the joint panels keep the last finished forecast until the next one finishes", async () => {
+    // Chunks 400 ms apart: a forecast takes over a second, long enough to look at mid-way.
+    const page = await open(`${server.url}www/?mode=live&action=grasp&seed=11&every=5&chunkDelay=400`);
+    await page.waitForFunction(() => ["predicting", "predicted", "error"].includes(document.body.dataset.state));
+    await pause(page);
+    assert.equal((await forecastAt(page, 12)).from, 11);
+    const held = (await pixels(page, "joints-plot")).hash;
+    const finished = await forecasts(page);
+    await page.locator("#scrubber").fill("17");
+    // The new forecast's first chunk is in (its frames drawn), the forecast not finished.
+    await page.waitForFunction(() => Number(document.body.dataset.progress) > 0 && document.body.dataset.state === "predicting");
+    assert.equal(await page.getAttribute("body", "data-seen"), "16");
+    assert.equal((await pixels(page, "joints-plot")).hash, held, "the panels still show the forecast from step 11");
+    assert.equal(await forecasts(page), finished);
+    assert.equal((await forecastAt(page, 17)).from, 16);
+    assert.notEqual((await pixels(page, "joints-plot")).hash, held, "the finished forecast replaced it");
+    assert.deepEqual(page.problems, []);
+    await close(page);
+  });
+
   test("the URL keeps the rule; models are compared on one plot", async () => {
     const page = await open(`${server.url}www/?mode=live&action=grasp&seed=11&every=10&ahead=5&ghost=0&observe=joints`);
     await page.waitForFunction(() => ["predicting", "predicted", "error"].includes(document.body.dataset.state));
