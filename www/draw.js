@@ -31,10 +31,12 @@ export function renderSoon({ framesOnly = false } = {}) {
   drawSoon = framesOnly && pending !== "all" ? "frames" : "all";
   if (pending) return;
   requestAnimationFrame(() => {
-    if (drawSoon === "frames") {
+    const wanted = drawSoon;
+    drawSoon = null;
+    if (wanted === "frames") {
       drawFrames();
       if (state.prediction?.count) firstDrawn(state.prediction);
-    } else if (drawSoon) render();
+    } else if (wanted) render();
   });
 }
 
@@ -45,9 +47,10 @@ export function shownStep() {
 }
 
 export function render() {
+  // Everything drawn now: a draw waiting for the next animation frame is not needed.
+  drawSoon = null;
   const { shown, prediction: p, step } = state;
   if (!shown) {
-    drawSoon = null;
     drawJoints(ui.plot, ui.plotCursor, null);
     return;
   }
@@ -78,7 +81,6 @@ export function render() {
 
 /** The true frame and the prediction of the step shown: predicted frame, ghost, σ map. */
 function drawFrames() {
-  drawSoon = null;
   const { shown, prediction: p, step } = state;
   if (!shown) return;
   const live = shown.mode === "live";
