@@ -40,9 +40,9 @@ export function renderSoon({ framesOnly = false } = {}) {
   });
 }
 
-/** The step whose prediction is drawn: the current one, or in live mode the forecast some steps ahead of it. */
-export function shownStep() {
-  const { shown, step } = state;
+/** The step whose prediction is drawn at `step`: that one, or in live mode the forecast some steps ahead of it. */
+export function shownStep(step = state.step) {
+  const { shown } = state;
   return shown.mode === "live" ? Math.min(shown.len - 1, step + clampInt(ui.ahead.value, 1, 100)) : step;
 }
 

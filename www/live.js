@@ -66,7 +66,7 @@ export function forecastNow(step = state.step) {
   // Everything observed: the last forecast stays on screen.
   if (from >= shown.len) return render();
   // The step on screen (some steps ahead) is decoded first, alone.
-  predict({ from, chunk: CHUNK, first: shownStep(), keepEncoded: true });
+  predict({ from, chunk: CHUNK, first: shownStep(step), keepEncoded: true });
 }
 
 /** The error curves of the episode on screen under the current rule and modalities. */
