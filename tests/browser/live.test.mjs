@@ -144,7 +144,10 @@ describe("live mode", () => {
     assert.equal(await page.inputValue("#ahead"), "5");
     assert.equal(await page.isChecked("#ghost"), false);
     // A value being typed is not the rule yet: a forecast that finishes meanwhile is made and
-    // plotted under the old rule, and the new rule's curve starts empty.
+    // plotted under the old rule, and the new rule's curve starts empty. (The forecast of the
+    // steps played before the pause finishes first: counted after it, it is not taken for the
+    // one from step 25.)
+    await page.waitForFunction(() => ["predicted", "error"].includes(document.body.dataset.state));
     const finished = await forecasts(page);
     await page.locator("#scrubber").fill("25");
     await page.fill("#live-every", "8");
