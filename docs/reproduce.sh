@@ -54,7 +54,7 @@ stage() {
     return
   fi
   "$bin/train" --data "$data" --out "$out/runs/$name" --joint-weight 1 --contexts-in-targets \
-    --targets-per-sequence 8 --joint-targets 32 --single-modality 0.3 --prefix-contexts 0.3 \
+    --targets-per-sequence 8 --joint-targets 32 --single-modality "${single_modality:-0.3}" --prefix-contexts 0.3 \
     --val-every "$every" --checkpoint-every "$every" --val-fraction "$fraction" --half \
     --schedule cosine "$@"
 }
@@ -70,7 +70,9 @@ if [ "${TRAIN:-0}" = 1 ]; then
       sim/attn) stage attn "${first[@]}" --model attn --beta-nll 1 --encoder-filters 16,32,64,64,128 \
           --decoder-filters 128,64,32,32,16,16,8 --coarse-tail
         stage attn-2 "${longer[@]}" --init "$out/runs/attn/model.dmbn" --steps 2000 --seed 2
-        file[$m]=$out/runs/attn-2/best.dmbn ;;
+        # Frames alone in 30% of the sequences (the mirror, `dmbn imitate`).
+        single_modality=0.6 stage attn-3 --lr 5e-4 --beta-nll 1 --init "$out/runs/attn-2/best.dmbn" --steps 2000 --seed 3
+        file[$m]=$out/runs/attn-3/model.dmbn ;;
       sim/pte) stage pte "${first[@]}" --model pte --beta-nll 1
         stage pte-2 "${longer[@]}" --init "$out/runs/pte/model.dmbn" --steps 3000 --seed 2
         file[$m]=$out/runs/pte-2/model.dmbn ;;

@@ -3,13 +3,16 @@
 #![cfg(target_arch = "wasm32")]
 
 mod golden;
+#[path = "golden/imitation.rs"]
+mod golden_imitation;
 #[path = "golden/prediction.rs"]
 mod golden_prediction;
 #[path = "golden/score.rs"]
 mod golden_score;
 
 use dmbn::web::{
-    heat_map, placement_region, run_episode, Episode, Folder, ModelHandle, Prediction, Simulator,
+    heat_map, perform, placement_region, replay, run_episode, Episode, Folder, ModelHandle,
+    Prediction, Simulator,
 };
 use wasm_bindgen::{JsError, JsValue};
 use wasm_bindgen_test::wasm_bindgen_test;
@@ -526,4 +529,76 @@ fn folder_reads_a_sequence_as_written_and_reports_the_readers_errors() {
         "{near} {far}"
     );
     assert!(ep.joint_distance(vec![0.0; 6], vec![1.0; 7]).is_err());
+}
+
+/// `Model.imitate` against the native golden: the same trajectory within 1e-4 and the same
+/// outcome; the simulator performs the golden trajectories and the replay bit for bit.
+#[wasm_bindgen_test]
+fn imitation_matches_native() {
+    let golden = golden_imitation::expected();
+    let model = ModelHandle::from_bytes(golden_imitation::MODEL).unwrap();
+    let action = golden_imitation::ACTION.name();
+    let ep = run_episode(action.into(), golden_imitation::SEED as f64, 64).unwrap();
+    for ((task, blend), want) in [("frames", 1.0), ("finish", 0.5)].iter().zip(&golden.tasks) {
+        let i = model
+            .imitate(&ep, action.into(), (*task).into(), 5.0, *blend)
+            .unwrap()
+            .expect("long enough");
+        let outcome: serde_json::Value =
+            serde_wasm_bindgen::from_value(i.outcome().unwrap()).unwrap();
+        let f = |k: &str| outcome[k].as_f64().unwrap() as f32;
+        let got = golden_imitation::Sample {
+            trajectory: i.trajectory(),
+            success: outcome["success"].as_bool().unwrap(),
+            lift_cm: f("lift_cm"),
+            object_error_cm: f("object_error_cm"),
+            path_error_cm: f("path_error_cm"),
+            performance_digest: i.performance().digest(),
+        };
+        golden_imitation::assert_agrees(&got, want, 1e-4);
+        assert!(outcome["summary"].as_str().unwrap().len() > 5);
+        // The same trajectory performed here is the native performance, bit for bit.
+        let object = ep.object();
+        let performed = perform(&want.trajectory, object[0], object[1], 64).unwrap();
+        assert_eq!(performed.digest(), want.performance_digest);
+    }
+    let r = replay(&ep, action.into()).unwrap();
+    assert_eq!(r.performance().digest(), golden.replay_digest);
+    assert_eq!(r.observed(), Vec::<u32>::new());
+    assert_eq!(r.joint_rmse(), 0.0);
+}
+
+#[wasm_bindgen_test]
+fn bad_imitation_arguments_throw() {
+    let model = ModelHandle::from_bytes(golden_imitation::MODEL).unwrap();
+    let ep = grasp7();
+    let err = |e: Result<Option<dmbn::web::Imitation>, JsError>| message(e.err().unwrap());
+    assert!(err(model.imitate(&ep, 3.into(), "frames".into(), 5.0, 1.0))
+        .contains("action must be a string"));
+    assert!(err(model.imitate(&ep, "grasp".into(), 3.into(), 5.0, 1.0))
+        .contains("task must be a string"));
+    assert!(
+        err(model.imitate(&ep, "grasp".into(), "interp".into(), 5.0, 1.0))
+            .contains("frames or finish")
+    );
+    for k in [1.0, 2.5, -1.0, f64::NAN, f64::INFINITY, 2f64.powi(53)] {
+        assert!(
+            err(model.imitate(&ep, "grasp".into(), "frames".into(), k, 1.0))
+                .contains("observations")
+        );
+    }
+    assert!(err(model.imitate(&ep, "grasp".into(), "frames".into(), 5.0, 2.0)).contains("blend"));
+    let bad = |t: &[f32]| message(perform(t, 0.0, 0.5, 64).err().unwrap());
+    assert!(bad(&[0.0; 13]).contains("13 values"));
+    assert!(bad(&[]).contains("no rows"));
+    assert!(bad(&[f32::NAN; 7]).contains("NaN"));
+    assert!(bad(&[9.0; 7]).contains("joint limits"));
+    let ok = ep.joints();
+    assert!(message(perform(&ok, 5.0, 0.5, 64).err().unwrap()).contains("placement region"));
+    assert!(message(replay(&ep, "jump".into()).err().unwrap()).contains("unknown action"));
+    // Still usable afterwards.
+    assert!(model
+        .imitate(&ep, "grasp".into(), "frames".into(), 5.0, 1.0)
+        .unwrap()
+        .is_some());
 }

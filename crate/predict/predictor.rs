@@ -117,12 +117,7 @@ impl Predictor {
         representation: &Representation,
         target_times: &[f32],
     ) -> Result<SequencePrediction, ModelError> {
-        if let Some(t) = target_times.iter().find(|t| !t.is_finite()) {
-            return Err(ModelError::observation(
-                "target_times",
-                format!("contains {t}: expected finite phases"),
-            ));
-        }
+        check_times(target_times)?;
         let mut out = SequencePrediction::empty(self.model.image_size());
         for chunk in target_times.chunks(Self::CHUNK) {
             let times = Tensor::<2>::from_data(
@@ -153,6 +148,32 @@ impl Predictor {
         self.decode(&representation, target_times)
     }
 
+    /// Only the joint means at `target_times` (radians and the gripper value, one row per
+    /// target), from `observations` with blend `blend`: the image decoder, most of a target's
+    /// cost, is skipped. What an arm that imitates needs ([`crate::imitate`]).
+    pub fn predict_joints(
+        &self,
+        observations: &Observations,
+        target_times: &[f32],
+        blend: f32,
+    ) -> Result<Vec<[f32; JOINTS]>, ModelError> {
+        let representation = self.encode(observations, blend)?;
+        check_times(target_times)?;
+        let mut rows = Vec::with_capacity(target_times.len());
+        for chunk in target_times.chunks(Self::CHUNK) {
+            let times = Tensor::<2>::from_data(
+                TensorData::new(chunk.to_vec(), [1, chunk.len()]),
+                &self.device,
+            );
+            let (mean, _) = self.model.decode_joints(&representation, times)?;
+            for row in model::values(mean).chunks_exact(JOINTS) {
+                let row: [f32; JOINTS] = std::array::from_fn(|j| row[j]);
+                rows.push(self.normalization.denormalize(&row));
+            }
+        }
+        Ok(rows)
+    }
+
     /// The one-sequence batch of checked `observations` (no targets: only times are known
     /// at inference, and they are decoded separately; its blend is left at 0, as the blend
     /// is applied when the encodings are represented).
@@ -166,6 +187,17 @@ impl Predictor {
             batch.set_context(0, i, frame, self.normalization.normalize(&row), time);
         }
         batch
+    }
+}
+
+/// Fails unless every target time is a finite phase.
+fn check_times(target_times: &[f32]) -> Result<(), ModelError> {
+    match target_times.iter().find(|t| !t.is_finite()) {
+        Some(t) => Err(ModelError::observation(
+            "target_times",
+            format!("contains {t}: expected finite phases"),
+        )),
+        None => Ok(()),
     }
 }
 

@@ -4,7 +4,7 @@ use std::str::FromStr;
 use super::SimError;
 
 /// The two scripted actions of the DMBN dataset.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub enum Action {
     /// Approach above the object, descend, close the gripper, lift.
     Grasp,

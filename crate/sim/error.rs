@@ -36,6 +36,8 @@ pub enum SimError {
     DuplicateAction(Action),
     #[error("only {written} of {total} sequences were generated")]
     Incomplete { written: usize, total: usize },
+    #[error("trajectory {0}")]
+    Trajectory(String),
     #[error(transparent)]
     Data(#[from] DataError),
 }

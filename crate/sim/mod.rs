@@ -10,10 +10,12 @@ mod error;
 #[cfg(not(target_arch = "wasm32"))]
 mod generate;
 mod ik;
+mod outcome;
 mod plan;
 mod render;
 mod scene;
 mod simulator;
+mod trajectory;
 
 pub use action::Action;
 pub use arm::Arm;
@@ -21,7 +23,9 @@ pub use error::SimError;
 #[cfg(not(target_arch = "wasm32"))]
 pub use generate::generate;
 pub use ik::{GripperPose, Ik};
-pub use plan::Plan;
+pub use outcome::Outcome;
+pub use plan::{Plan, GRIPPER_CLOSED, GRIPPER_OPEN};
 pub use render::{Camera, Primitive, Renderer, Shape};
 pub use scene::{Scene, OBJECT_HALF_HEIGHT, OBJECT_RADIUS, SUBSTEPS};
-pub use simulator::{episode, Simulator};
+pub use simulator::{episode, perform, Simulator};
+pub use trajectory::Trajectory;

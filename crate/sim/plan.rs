@@ -5,7 +5,7 @@ use rapier3d::math::Vector;
 use super::arm::{ARM_JOINTS, FINGER_OPEN};
 use super::ik::{GripperPose, Ik};
 use super::scene::OBJECT_RADIUS;
-use super::Action;
+use super::{Action, Trajectory};
 
 /// Joint angles near the home pose (gripper above the table centre, pointing down): the
 /// starting guess that puts IK on the elbow-up, wrist-down branch.
@@ -13,6 +13,11 @@ pub const HOME_GUESS: [f32; ARM_JOINTS] =
     [0.0, -1.2, 1.5, -1.87, -core::f32::consts::FRAC_PI_2, 0.0];
 /// Where every episode starts: above the middle of the placement region.
 pub const HOME: [f32; 3] = [0.0, 0.52, 0.40];
+/// A performed trajectory's gripper column (the fingers' total travel, negative) above which
+/// the gripper is commanded open (see [`Plan::from_trajectory`]).
+pub const GRIPPER_OPEN: f32 = -0.03;
+/// ... and below which it is commanded fully closed.
+pub const GRIPPER_CLOSED: f32 = -0.06;
 
 /// The scripted trajectory of one episode: per recorded step, the joint targets the motors
 /// track and the gripper closure (0 open, 1 fully closed).
@@ -140,6 +145,31 @@ impl Plan {
             }
         };
         Self::from_segments(home, &segments)
+    }
+
+    /// The motor targets that make the arm perform `trajectory`: its rows' angles, and the
+    /// gripper commanded closed as the gripper column closes, read one step ahead (the
+    /// fingers reach a closure a step after it is commanded). The column is the fingers'
+    /// measured travel, not a command: an open gripper's leading finger is pushed in by up
+    /// to about a centimetre when it pushes the object, and fingers closed on the object stop
+    /// at about -0.09. So the closure is 0 up to [`GRIPPER_OPEN`], 1 from [`GRIPPER_CLOSED`]
+    /// (the full closure squeezes, however far the fingers got), linear between.
+    ///
+    /// Replaying a recorded episode's joints so reproduces its outcome (the simulator's
+    /// tests): the arm is deflected a little by contacts when recorded and again when
+    /// replayed, which costs millimetres; a target lead to make up for the motors' lag only
+    /// moved the path further from the recording (measured).
+    pub fn from_trajectory(trajectory: &Trajectory) -> Plan {
+        let rows = trajectory.rows();
+        let last = rows.len() - 1;
+        let joints = rows.iter().map(|r| std::array::from_fn(|i| r[i])).collect();
+        let closure = (0..rows.len())
+            .map(|k| {
+                let gripper = rows[(k + 1).min(last)][ARM_JOINTS];
+                ((gripper - GRIPPER_OPEN) / (GRIPPER_CLOSED - GRIPPER_OPEN)).clamp(0.0, 1.0)
+            })
+            .collect();
+        Plan { joints, closure }
     }
 
     /// Number of recorded steps.

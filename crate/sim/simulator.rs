@@ -8,7 +8,7 @@ use super::arm::ARM_JOINTS;
 use super::plan::Plan;
 use super::render::{Primitive, Renderer};
 use super::scene::{Scene, CAMERA, DT, SUBSTEPS, TABLE};
-use super::{Action, SimError};
+use super::{Action, SimError, Trajectory};
 
 /// A running episode: physics scene, scripted plan and renderer.
 ///
@@ -48,6 +48,25 @@ impl Simulator {
         seed: u64,
         image_size: u32,
     ) -> Result<Self, SimError> {
+        let mut rng = Pcg64::seed_from_u64(seed ^ PLAN_STREAM);
+        let plan = Plan::new(action, [x, y], &mut rng);
+        Self::with_plan(plan, x, y, image_size)
+    }
+
+    /// The arm performing `trajectory` (see [`Plan::from_trajectory`]) with the object at
+    /// `(x, y)`: the same motors, physics and recording as a scripted episode, one recorded
+    /// step per row. The arm starts at the first row's angles.
+    pub fn performing(
+        trajectory: &Trajectory,
+        x: f32,
+        y: f32,
+        image_size: u32,
+    ) -> Result<Self, SimError> {
+        Self::with_plan(Plan::from_trajectory(trajectory), x, y, image_size)
+    }
+
+    /// An episode whose motors track `plan`'s targets, with the object at `(x, y)`.
+    pub fn with_plan(plan: Plan, x: f32, y: f32, image_size: u32) -> Result<Self, SimError> {
         if !IMAGE_SIZES.contains(&(image_size as usize)) {
             return Err(SimError::ImageSize(image_size));
         }
@@ -62,8 +81,6 @@ impl Simulator {
                 y1: ry[1],
             });
         }
-        let mut rng = Pcg64::seed_from_u64(seed ^ PLAN_STREAM);
-        let plan = Plan::new(action, [x, y], &mut rng);
         let scene = Scene::new(&plan.joints[0], [x, y]);
         Ok(Simulator {
             plan,
@@ -186,4 +203,14 @@ impl Simulator {
 /// Generate one whole episode.
 pub fn episode(action: Action, seed: u64, image_size: u32) -> Result<Sequence, SimError> {
     Ok(Simulator::new(action, seed, image_size)?.run())
+}
+
+/// Record the arm performing `trajectory` with the object at `object` (x, y): see
+/// [`Simulator::performing`].
+pub fn perform(
+    trajectory: &Trajectory,
+    object: [f32; 2],
+    image_size: u32,
+) -> Result<Sequence, SimError> {
+    Ok(Simulator::performing(trajectory, object[0], object[1], image_size)?.run())
 }

@@ -4,9 +4,12 @@ use wasm_bindgen::prelude::*;
 
 use serde::Serialize;
 
+use super::action::parse_action;
 use super::contexts::Contexts;
 use super::encoding::Encoding;
+use super::imitation::{parse_observations, parse_task, Imitation};
 use super::Episode;
+use crate::imitate;
 use crate::predict::{Observations, Predictor, SequencePrediction};
 use crate::quality::{score_sequence, Quality, Scenario};
 
@@ -173,6 +176,36 @@ impl ModelHandle {
         value
             .serialize(&serializer)
             .map_err(|e| JsError::new(&e.to_string()))
+    }
+
+    /// The mirror on one demonstration (what `dmbn imitate` does per sequence): the model
+    /// observes `episode` (an episode of `action`, `"grasp"` or `"move"`) as `task` asks —
+    /// `"frames"`: `observations` evenly spaced steps, the arm performs the whole predicted
+    /// trajectory; `"finish"`: the first 30% at 3 steps, performed as recorded, then the
+    /// prediction — with `blend` (1 = frames only, the mirror's act; `"finish"` uses 0.5 in
+    /// `dmbn imitate`), and the simulated arm performs the predicted joint means with the
+    /// object where the episode had it. Returns an `Imitation`, `undefined` when the episode
+    /// is too short for the task. Throws on bad arguments.
+    pub fn imitate(
+        &self,
+        episode: &Episode,
+        #[wasm_bindgen(unchecked_param_type = "string")] action: JsValue,
+        #[wasm_bindgen(unchecked_param_type = "string")] task: JsValue,
+        observations: f64,
+        blend: f32,
+    ) -> Result<Option<Imitation>, JsError> {
+        let action = parse_action(&action)?;
+        let task = parse_task(&task)?;
+        let observations = parse_observations(observations)?;
+        let imitation = imitate::imitate(
+            &self.inner,
+            episode.sequence(),
+            action,
+            task,
+            observations,
+            blend,
+        )?;
+        Ok(imitation.map(Imitation::from))
     }
 }
 

@@ -11,6 +11,8 @@ mod eval;
 #[cfg(not(target_arch = "wasm32"))]
 mod exchange;
 #[cfg(not(target_arch = "wasm32"))]
+mod imitate;
+#[cfg(not(target_arch = "wasm32"))]
 mod inspect;
 #[cfg(not(target_arch = "wasm32"))]
 mod output;
@@ -30,7 +32,7 @@ mod simulate;
 #[command(
     name = "dmbn",
     version,
-    about = "DMBN datasets and models: simulate, inspect, predict, eval, probe, score, export, import"
+    about = "DMBN datasets and models: simulate, inspect, predict, eval, probe, score, imitate, export, import"
 )]
 struct Cli {
     #[command(subcommand)]
@@ -74,6 +76,15 @@ enum Command {
     /// table per scenario (joint RMSE in radians, gripper error, image MSE, errors at the
     /// observed steps, object visibility, NLL); --json writes them.
     Score(score::ScoreArgs),
+    /// The mirror: models see a demonstration and the simulated arm performs what they imagine.
+    ///
+    /// frames: K evenly spaced frames observed (no joints), the arm performs the predicted
+    /// joint means; finish: the first 30% observed, performed as recorded, then the
+    /// prediction. The object is placed as in the demonstration; a grasp succeeds when it
+    /// lifts the object 10 cm, a push when it lands within 3 cm of the demonstration's spot.
+    /// Each model against the ceiling (the recorded joints performed) and the floor (the
+    /// action's mean motion performed): success rate, object and path errors, joint RMSE.
+    Imitate(imitate::ImitateArgs),
     /// Write a model file's weights as safetensors for PyTorch (python/dmbn_torch.py).
     ///
     /// Every tensor under its PyTorch twin's name and layout (Conv2d [out, in, kh, kw],
@@ -95,6 +106,7 @@ fn main() -> std::process::ExitCode {
         Command::Eval(args) => eval::run(args),
         Command::Probe(args) => probe::run(args),
         Command::Score(args) => score::run(args),
+        Command::Imitate(args) => imitate::run(args),
         Command::Export(args) => exchange::export(args),
         Command::Import(args) => exchange::import(args),
     };

@@ -1,0 +1,211 @@
+//! `dmbn imitate`: the mirror benchmark (models see a demonstration, the simulated arm
+//! performs what they imagine).
+use std::collections::btree_map::Entry;
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+
+use clap::{Args, ValueEnum};
+use serde::Serialize;
+
+use dmbn::data::{Dataset, Sequence};
+use dmbn::imitate::{
+    imitate, mean_motion, replay, ImitateError, ImitationReport, OutcomeSums, Task,
+};
+use dmbn::predict::Predictor;
+use dmbn::quality::MeanMotion;
+use dmbn::sim::{Action, Outcome};
+
+use crate::args::{parse_blend, parse_ids};
+use crate::error::CliError;
+use crate::output::{progress, write_json};
+
+#[derive(Clone, Copy, PartialEq, ValueEnum)]
+enum TaskArg {
+    /// K evenly spaced frames observed, no joints; the arm performs the whole prediction.
+    Frames,
+    /// The first 30% observed (both modalities); the arm performs it as recorded, then the
+    /// prediction.
+    Finish,
+    /// Both.
+    All,
+}
+
+#[derive(Args)]
+pub struct ImitateArgs {
+    /// Model file; repeat to compare models on the same demonstrations.
+    #[arg(long = "model", required = true)]
+    models: Vec<PathBuf>,
+    /// A simulator dataset in the DMBN layout (`dmbn simulate`): the object is placed where
+    /// `object_<id>.txt` has it at the first step.
+    #[arg(long)]
+    data: PathBuf,
+    /// Sequence ids to imitate, A-B inclusive (default: every id). Use ids the models never
+    /// trained on.
+    #[arg(long, value_parser = parse_ids)]
+    ids: Option<(u32, u32)>,
+    /// Frames observed per demonstration in `frames` (K ≥ 2, evenly spaced, first and last
+    /// included).
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(2..))]
+    observations: u32,
+    /// Which task.
+    #[arg(long, value_enum, default_value = "all")]
+    task: TaskArg,
+    /// Blending coefficient c (1 = frames only); default 1 for `frames`, 0.5 for `finish`.
+    #[arg(long, value_parser = parse_blend)]
+    blend: Option<f32>,
+    /// Fit the floor, each action's mean motion, on these ids of --data (A-B; default: the
+    /// imitated ones).
+    #[arg(long, value_parser = parse_ids)]
+    mean_ids: Option<(u32, u32)>,
+    /// Write the reports as JSON here (a list, one per task, with every performance's outcome).
+    #[arg(long)]
+    json: Option<PathBuf>,
+}
+
+/// One performance, for the JSON.
+#[derive(Serialize)]
+struct Performed {
+    id: u32,
+    trajectory: String,
+    #[serde(flatten)]
+    outcome: Outcome,
+}
+
+#[derive(Serialize)]
+struct TaskJson {
+    #[serde(flatten)]
+    report: ImitationReport,
+    performances: Vec<Performed>,
+}
+
+const CEILING: &str = "ceiling: recorded joints";
+const FLOOR: &str = "floor: mean motion";
+
+pub fn run(args: ImitateArgs) -> Result<(), CliError> {
+    let predictors = args
+        .models
+        .iter()
+        .map(|path| {
+            let p = Predictor::load(path)?;
+            let name = path.file_name().map_or_else(
+                || path.display().to_string(),
+                |n| n.to_string_lossy().into_owned(),
+            );
+            Ok((name, p))
+        })
+        .collect::<Result<Vec<_>, CliError>>()?;
+    let dataset = Dataset::open(&args.data)?;
+    let in_range =
+        |id: u32, range: Option<(u32, u32)>| range.is_none_or(|(a, b)| (a..=b).contains(&id));
+    let read = |range: Option<(u32, u32)>, size: usize| {
+        dataset
+            .sequences()
+            .iter()
+            .filter(|s| in_range(s.id, range))
+            .map(|r| {
+                let action: Action = r.action.parse()?;
+                Ok((r.id, action, dataset.read(r, Some(size as u32))?))
+            })
+            .collect::<Result<Vec<(u32, Action, Sequence)>, CliError>>()
+    };
+    // The demonstrations at each frame size the models need.
+    let mut by_size = BTreeMap::new();
+    for (_, p) in &predictors {
+        let size = p.model().image_size();
+        if let Entry::Vacant(entry) = by_size.entry(size) {
+            entry.insert(read(args.ids, size)?);
+        }
+    }
+    let demos = by_size.values().next().expect("at least one model");
+    if demos.is_empty() {
+        return Err(CliError::Usage(format!(
+            "{}: no sequence with an id in {:?}",
+            args.data.display(),
+            args.ids.unwrap_or_default()
+        )));
+    }
+    let reference = match args.mean_ids {
+        Some(range) => read(Some(range), demos[0].2.image_size as usize)?,
+        None => Vec::new(),
+    };
+    let reference = if args.mean_ids.is_some() {
+        &reference
+    } else {
+        demos
+    };
+    let mean = MeanMotion::fit(reference.iter().map(|(_, a, s)| (a.name(), s)))
+        .ok_or_else(|| CliError::Usage(format!("--mean-ids {:?}: no sequence", args.mean_ids)))?;
+
+    let tasks = match args.task {
+        TaskArg::Frames => vec![Task::Frames],
+        TaskArg::Finish => vec![Task::Finish],
+        TaskArg::All => Task::ALL.to_vec(),
+    };
+    let k = args.observations as usize;
+    // Rows: the ceiling, the floor, then the models in order.
+    let row_name = |r: usize| match r {
+        0 => CEILING,
+        1 => FLOOR,
+        _ => predictors[r - 2].0.as_str(),
+    };
+    let mut out = Vec::new();
+    for task in tasks {
+        let blend = args.blend.unwrap_or(task.default_blend());
+        // Per action, per row (ceiling, floor, models in order).
+        let mut sums: BTreeMap<Action, Vec<OutcomeSums>> = BTreeMap::new();
+        let mut performances = Vec::new();
+        let rows = predictors.len() + 2;
+        let bar = progress(demos.len() * rows, &format!("{task}"));
+        for (i, (id, action, demo)) in demos.iter().enumerate() {
+            // Which demonstration failed, for a message that names it.
+            let named = |e: ImitateError| {
+                CliError::Usage(format!("{}: {id}/{action}: {e}", args.data.display()))
+            };
+            let mut performed = vec![Some(replay(demo, *action).map_err(named)?)];
+            performed.push(mean_motion(demo, *action, task, k, &mean).map_err(named)?);
+            bar.inc(2);
+            for (_, p) in &predictors {
+                let demo = &by_size[&p.model().image_size()][i].2;
+                performed.push(imitate(p, demo, *action, task, k, blend).map_err(named)?);
+                bar.inc(1);
+            }
+            if performed.iter().any(Option::is_none) {
+                continue; // too short for the task
+            }
+            let entry = sums
+                .entry(*action)
+                .or_insert_with(|| vec![OutcomeSums::default(); rows]);
+            for (r, imitation) in performed.iter().flatten().enumerate() {
+                entry[r].add(imitation);
+                performances.push(Performed {
+                    id: *id,
+                    trajectory: row_name(r).to_string(),
+                    outcome: imitation.outcome,
+                });
+            }
+        }
+        bar.finish_and_clear();
+        let mut report = ImitationReport {
+            task,
+            observations: k,
+            blend,
+            rows: Vec::new(),
+        };
+        for (action, rows) in &sums {
+            for (r, s) in rows.iter().enumerate() {
+                let ceiling = (r > 0).then_some(&rows[0]);
+                report.rows.push(s.row(row_name(r), action.name(), ceiling));
+            }
+        }
+        println!("{}", report.table());
+        out.push(TaskJson {
+            report,
+            performances,
+        });
+    }
+    if let Some(path) = &args.json {
+        write_json(path, &out)?;
+        println!("wrote {}", path.display());
+    }
+    Ok(())
+}

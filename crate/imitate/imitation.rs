@@ -1,0 +1,142 @@
+use super::task::TaskSteps;
+use super::{ImitateError, Task};
+use crate::data::{Sequence, JOINTS};
+use crate::predict::{Observations, Predictor};
+use crate::quality::MeanMotion;
+use crate::sim::{perform, Action, Outcome, Trajectory};
+
+/// Arm joints among the [`JOINTS`] values (the last one is the gripper).
+const ARM: usize = JOINTS - 1;
+
+/// One performance of a demonstration's action: the trajectory the arm was given, what it
+/// did, and how that went.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Imitation {
+    /// The trajectory performed, one row per step of the demonstration.
+    pub trajectory: Vec<[f32; JOINTS]>,
+    /// The recorded performance (frames, reached joints, object track).
+    pub performance: Sequence,
+    /// Judged against the demonstration.
+    pub outcome: Outcome,
+    /// The demonstration's steps the model observed (none for a replay).
+    pub observed: Vec<usize>,
+    /// The first step performed from the trajectory's own rows rather than the recording.
+    pub predicted_from: usize,
+    /// Squared error of the arm joints (radians²) summed over the steps from
+    /// `predicted_from` on, against the demonstration's recorded joints.
+    pub joint_se: f64,
+    /// How many steps `joint_se` sums over.
+    pub joint_steps: usize,
+}
+
+impl Imitation {
+    /// Root mean squared error of the trajectory's arm joints at its own steps (radians).
+    pub fn joint_rmse(&self) -> f64 {
+        (self.joint_se / (self.joint_steps * ARM).max(1) as f64).sqrt()
+    }
+}
+
+/// `predictor` imitates `demo` (an episode of `action`): it observes the `task`'s steps
+/// (`observations` for `frames`) with blend `blend`, predicts the joint means at every step,
+/// and the arm performs them (after the observed part as recorded, for `finish`) with the
+/// object where the demonstration had it. `Ok(None)` when the demonstration is too short.
+pub fn imitate(
+    predictor: &Predictor,
+    demo: &Sequence,
+    action: Action,
+    task: Task,
+    observations: usize,
+    blend: f32,
+) -> Result<Option<Imitation>, ImitateError> {
+    let Some(steps) = task.steps(demo.len(), observations) else {
+        return Ok(None);
+    };
+    let observed = Observations::from_sequence(demo, &steps.observed)?;
+    let times = demo.times();
+    let predicted = predictor.predict_joints(&observed, &times[steps.predicted_from..], blend)?;
+    Ok(Some(act(demo, action, steps, predicted)?))
+}
+
+/// The ceiling: the demonstration's own recorded joints performed.
+pub fn replay(demo: &Sequence, action: Action) -> Result<Imitation, ImitateError> {
+    let steps = TaskSteps {
+        observed: Vec::new(),
+        predicted_from: 0,
+    };
+    act(demo, action, steps, demo.joints.clone())
+}
+
+/// The floor: the action's mean motion performed (after the observed part as recorded, for
+/// `finish`), what a model that ignores what it saw would do at best. `Ok(None)` when the
+/// demonstration is too short for the task.
+pub fn mean_motion(
+    demo: &Sequence,
+    action: Action,
+    task: Task,
+    observations: usize,
+    mean: &MeanMotion,
+) -> Result<Option<Imitation>, ImitateError> {
+    let Some(steps) = task.steps(demo.len(), observations) else {
+        return Ok(None);
+    };
+    let rows = demo.times()[steps.predicted_from..]
+        .iter()
+        .map(|&phase| {
+            mean.at(action.name(), phase).map(|(_, joints)| joints).ok_or_else(|| {
+                ImitateError::Invalid(format!(
+                    "the mean motion has no {action} sequence: fit it on sequences of every action imitated"
+                ))
+            })
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok(Some(act(
+        demo,
+        action,
+        TaskSteps {
+            observed: Vec::new(),
+            ..steps
+        },
+        rows,
+    )?))
+}
+
+/// Performs the demonstration's recorded rows before `steps.predicted_from`, then `rows`,
+/// with the object where the demonstration had it at its first step, and judges the result.
+fn act(
+    demo: &Sequence,
+    action: Action,
+    steps: TaskSteps,
+    rows: Vec<[f32; JOINTS]>,
+) -> Result<Imitation, ImitateError> {
+    let from = steps.predicted_from;
+    if demo.is_empty() || rows.len() + from != demo.len() {
+        return Err(ImitateError::Invalid(format!(
+            "{} rows after {from} recorded ones for a demonstration of {} steps",
+            rows.len(),
+            demo.len()
+        )));
+    }
+    let trajectory: Vec<[f32; JOINTS]> = demo.joints[..from].iter().copied().chain(rows).collect();
+    let object = demo.object[0];
+    let performance = perform(
+        &Trajectory::new(trajectory.clone())?,
+        [object[0], object[1]],
+        demo.image_size,
+    )?;
+    let outcome = Outcome::judge(action, &performance, demo)
+        .ok_or_else(|| ImitateError::Invalid("an empty demonstration".into()))?;
+    let joint_se = trajectory[from..]
+        .iter()
+        .zip(&demo.joints[from..])
+        .flat_map(|(a, b)| (0..ARM).map(move |j| (a[j] as f64 - b[j] as f64).powi(2)))
+        .sum();
+    Ok(Imitation {
+        trajectory,
+        performance,
+        outcome,
+        observed: steps.observed,
+        predicted_from: from,
+        joint_se,
+        joint_steps: demo.len() - from,
+    })
+}

@@ -1,0 +1,16 @@
+//! The mirror (Seker et al. 2022: a DMBN "connects observations with motor plans for
+//! enaction"): shown a demonstration's frames, a model imagines its own joints, and the
+//! simulated arm performs them with the object where the demonstration had it. The outcome
+//! (did the grasp lift the object, did the push land it) is judged against the ceiling, the
+//! demonstration's own recorded joints replayed, and the floor, the action's mean motion
+//! replayed. One implementation natively (`dmbn imitate`) and in wasm (`Model.imitate`).
+mod error;
+mod imitation;
+mod report;
+mod task;
+
+pub use error::ImitateError;
+pub use imitation::{imitate, mean_motion, replay, Imitation};
+pub use report::{ImitationReport, ImitationRow, OutcomeSums};
+pub use task::Task;
+pub use task::TaskSteps;

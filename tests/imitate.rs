@@ -1,0 +1,295 @@
+//! The mirror: the arm performs joint trajectories (recorded, predicted, wrong), the outcomes
+//! are judged, `dmbn imitate` reports them, and the golden imitation the wasm tests must agree
+//! with. Native only (the wasm tests are in tests/web.rs).
+#![cfg(not(target_arch = "wasm32"))]
+
+mod golden;
+#[path = "golden/imitation.rs"]
+mod golden_imitation;
+mod support;
+
+use std::path::Path;
+use std::process::Command;
+
+use dmbn::data::Sequence;
+use dmbn::imitate::{imitate, mean_motion, replay, OutcomeSums, Task};
+use dmbn::predict::Predictor;
+use dmbn::quality::MeanMotion;
+use dmbn::sim::{episode, perform, Action, Outcome, SimError, Simulator, Trajectory};
+
+fn object(demo: &Sequence) -> [f32; 2] {
+    [demo.object[0][0], demo.object[0][1]]
+}
+
+#[test]
+fn replaying_the_recorded_joints_reproduces_the_outcome() {
+    for action in Action::ALL {
+        for seed in 400..406 {
+            let demo = episode(action, seed, 64).unwrap();
+            let r = replay(&demo, action).unwrap();
+            let o = r.outcome;
+            assert!(o.success, "{action} seed {seed}: {o:?}");
+            assert!(o.path_error_cm < 1.0, "{action} seed {seed}: {o:?}");
+            assert!(o.object_error_cm < 2.0, "{action} seed {seed}: {o:?}");
+            assert_eq!(r.performance.len(), demo.len());
+            assert_eq!(r.joint_rmse(), 0.0);
+        }
+    }
+}
+
+#[test]
+fn performing_is_deterministic_and_starts_at_the_first_row() {
+    let demo = episode(Action::Grasp, 3, 64).unwrap();
+    let t = Trajectory::new(demo.joints.clone()).unwrap();
+    let a = perform(&t, object(&demo), 64).unwrap();
+    let b = Simulator::performing(&t, demo.object[0][0], demo.object[0][1], 64)
+        .unwrap()
+        .run();
+    assert_eq!(a.digest(), b.digest());
+    assert_eq!(a.joints[0][..6], demo.joints[0][..6]);
+    assert_eq!(a.frame(0), demo.frame(0), "same start, same scene");
+}
+
+#[test]
+fn wrong_trajectories_fail_their_outcome() {
+    // A grasp whose gripper never closes, and a push that never leaves home.
+    let demo = episode(Action::Grasp, 5, 64).unwrap();
+    let open: Vec<[f32; 7]> = demo
+        .joints
+        .iter()
+        .map(|r| {
+            let mut r = *r;
+            r[6] = 0.0;
+            r
+        })
+        .collect();
+    let p = perform(&Trajectory::new(open).unwrap(), object(&demo), 64).unwrap();
+    let o = Outcome::judge(Action::Grasp, &p, &demo).unwrap();
+    assert!(!o.success && o.lift_cm < 2.0, "{o:?}");
+    assert!(o.summary().starts_with("missed"), "{}", o.summary());
+
+    let demo = episode(Action::Move, 5, 64).unwrap();
+    let home = vec![demo.joints[0]; demo.len()];
+    let p = perform(&Trajectory::new(home).unwrap(), object(&demo), 64).unwrap();
+    let o = Outcome::judge(Action::Move, &p, &demo).unwrap();
+    assert!(!o.success && o.object_error_cm > 5.0, "{o:?}");
+    assert!(o.path_error_cm > 5.0, "{o:?}");
+}
+
+#[test]
+fn bad_trajectories_and_placements_are_errors() {
+    let demo = episode(Action::Move, 2, 64).unwrap();
+    let mut rows = demo.joints.clone();
+    rows[3][1] = f32::NAN;
+    let err = Trajectory::new(rows).unwrap_err().to_string();
+    assert!(err.contains("row 3, column 1 is NaN"), "{err}");
+    let err = Trajectory::from_flat(&[0.0; 20]).unwrap_err().to_string();
+    assert!(err.contains("20 values"), "{err}");
+    let t = Trajectory::new(demo.joints.clone()).unwrap();
+    assert!(matches!(
+        perform(&t, [2.0, 0.5], 64),
+        Err(SimError::ObjectOutOfRegion { .. })
+    ));
+    assert!(matches!(
+        perform(&t, object(&demo), 65),
+        Err(SimError::ImageSize(65))
+    ));
+}
+
+#[test]
+fn frames_only_imitation_never_reads_the_observed_joints() {
+    let predictor = Predictor::load(support::asset("models/attn-sim.dmbn")).unwrap();
+    let demo = episode(Action::Grasp, 21, 64).unwrap();
+    let a = imitate(&predictor, &demo, Action::Grasp, Task::Frames, 5, 1.0)
+        .unwrap()
+        .unwrap();
+    let mut blind = demo.clone();
+    for row in &mut blind.joints {
+        *row = [1.0, -1.0, 0.5, 0.0, 2.0, -2.0, -0.1];
+    }
+    let b = imitate(&predictor, &blind, Action::Grasp, Task::Frames, 5, 1.0)
+        .unwrap()
+        .unwrap();
+    assert_eq!(a.trajectory, b.trajectory);
+    assert_eq!(
+        a.observed,
+        Task::Frames.steps(demo.len(), 5).unwrap().observed
+    );
+    assert_eq!(a.predicted_from, 0);
+    assert!(a.joint_rmse() > 0.0);
+}
+
+#[test]
+fn finish_performs_the_observed_part_as_recorded() {
+    let predictor = Predictor::load(support::asset("models/dmbn-sim.dmbn")).unwrap();
+    let demo = episode(Action::Move, 8, 64).unwrap();
+    let f = imitate(&predictor, &demo, Action::Move, Task::Finish, 5, 0.5)
+        .unwrap()
+        .unwrap();
+    let from = f.predicted_from;
+    assert_eq!(from, f.observed.last().unwrap() + 1);
+    assert_eq!(f.trajectory[..from], demo.joints[..from]);
+    assert_ne!(f.trajectory[from..], demo.joints[from..]);
+    assert_eq!(f.joint_steps, demo.len() - from);
+    // The floor: the mean motion of a set of pushes after the same recorded part.
+    let set: Vec<Sequence> = (30..36)
+        .map(|s| episode(Action::Move, s, 64).unwrap())
+        .collect();
+    let mean = MeanMotion::fit(set.iter().map(|s| ("move", s))).unwrap();
+    let floor = mean_motion(&demo, Action::Move, Task::Finish, 5, &mean)
+        .unwrap()
+        .unwrap();
+    assert_eq!(floor.trajectory[..from], demo.joints[..from]);
+    assert!(floor.observed.is_empty());
+    let grasps = MeanMotion::fit(set.iter().map(|s| ("grasp", s))).unwrap();
+    let err = mean_motion(&demo, Action::Move, Task::Finish, 5, &grasps).unwrap_err();
+    assert!(err.to_string().contains("no move sequence"), "{err}");
+}
+
+#[test]
+fn rows_count_successes_against_the_ceiling() {
+    let demo = episode(Action::Grasp, 9, 64).unwrap();
+    let good = replay(&demo, Action::Grasp).unwrap();
+    let mut bad = good.clone();
+    bad.outcome.success = false;
+    let (mut ceiling, mut model) = (OutcomeSums::default(), OutcomeSums::default());
+    for _ in 0..4 {
+        ceiling.add(&good);
+    }
+    model.add(&good);
+    model.add(&good);
+    model.add(&good);
+    model.add(&bad);
+    let row = model.row("m", "grasp", Some(&ceiling));
+    assert_eq!((row.episodes, row.successes), (4, 3));
+    assert!((row.of_ceiling.unwrap() - 0.75).abs() < 1e-12);
+    assert_eq!(ceiling.row("c", "grasp", None).of_ceiling, None);
+}
+
+/// The golden imitation: native writes it (`DMBN_BLESS=1`) and must reproduce it; the wasm
+/// tests must agree with it.
+#[test]
+fn default_model_reproduces_the_golden_imitation() {
+    let predictor = Predictor::from_bytes(golden_imitation::MODEL).unwrap();
+    let demo = episode(golden_imitation::ACTION, golden_imitation::SEED, 64).unwrap();
+    let got: Vec<golden_imitation::Sample> = Task::ALL
+        .iter()
+        .map(|&task| {
+            let i = imitate(
+                &predictor,
+                &demo,
+                golden_imitation::ACTION,
+                task,
+                5,
+                task.default_blend(),
+            )
+            .unwrap()
+            .unwrap();
+            golden_imitation::Sample::of(&i.trajectory, &i.outcome, &i.performance.digest())
+        })
+        .collect();
+    let replayed = replay(&demo, golden_imitation::ACTION).unwrap();
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/golden/imitation.json");
+    if std::env::var_os("DMBN_BLESS").is_some() {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "DMBN_BLESS is refused under CI"
+        );
+        let golden = golden_imitation::Golden {
+            tasks: got,
+            replay_digest: replayed.performance.digest(),
+        };
+        std::fs::write(&path, serde_json::to_string(&golden).unwrap() + "\n").unwrap();
+        return;
+    }
+    let want = golden_imitation::expected();
+    assert_eq!(replayed.performance.digest(), want.replay_digest);
+    for (got, want) in got.iter().zip(&want.tasks) {
+        golden_imitation::assert_agrees(got, want, 0.0);
+    }
+}
+
+#[test]
+fn dmbn_imitate_prints_tables_and_writes_json() {
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("data");
+    support::simulated_dataset(&data, 0..3, &Action::ALL, 500_000);
+    let json = tmp.path().join("imitate.json");
+    let out = Command::new(env!("CARGO_BIN_EXE_dmbn"))
+        .args(["imitate", "--model"])
+        .arg(support::asset("models/dmbn-sim.dmbn"))
+        .arg("--data")
+        .arg(&data)
+        .args(["--ids", "0-2", "--json"])
+        .arg(&json)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{stdout}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        stdout.contains("task frames (5 observations, blend 1)"),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("task finish (3 observations, blend 0.5)"),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("| grasp | ceiling: recorded joints | 3 | 3/3 (100%)"),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("| move | floor: mean motion | 3 |"),
+        "{stdout}"
+    );
+    let reports: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    assert_eq!(reports.as_array().unwrap().len(), 2);
+    assert_eq!(reports[0]["task"], "frames");
+    // Per action: ceiling, floor, the model.
+    assert_eq!(reports[0]["rows"].as_array().unwrap().len(), 6);
+    assert_eq!(reports[0]["rows"][2]["name"], "dmbn-sim.dmbn");
+    // Every performance: 3 ids × 2 actions × 3 rows.
+    assert_eq!(reports[1]["performances"].as_array().unwrap().len(), 18);
+    assert!(reports[1]["performances"][0]["success"].is_boolean());
+
+    // No sequence in the ids asked for.
+    let err = Command::new(env!("CARGO_BIN_EXE_dmbn"))
+        .args(["imitate", "--model"])
+        .arg(support::asset("models/dmbn-sim.dmbn"))
+        .arg("--data")
+        .arg(&data)
+        .args(["--ids", "7-9"])
+        .output()
+        .unwrap();
+    assert!(!err.status.success());
+    assert!(String::from_utf8_lossy(&err.stderr).contains("no sequence with an id in"));
+}
+
+#[test]
+fn dmbn_imitate_names_an_object_it_cannot_place() {
+    // An object off the simulator's table (the original DMBN data's frame, say).
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("data");
+    let mut demo = episode(Action::Grasp, 1, 64).unwrap();
+    for o in &mut demo.object {
+        o[0] = 1.5;
+    }
+    let mut writer = dmbn::data::DatasetWriter::create(&data).unwrap();
+    writer.write(0, "grasp", &demo).unwrap();
+    writer.finish().unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_dmbn"))
+        .args(["imitate", "--model"])
+        .arg(support::asset("models/dmbn-sim.dmbn"))
+        .arg("--data")
+        .arg(&data)
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("outside the placement region"), "{stderr}");
+}
