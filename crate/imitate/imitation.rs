@@ -32,8 +32,13 @@ pub struct Imitation {
 impl Imitation {
     /// Root mean squared error of the trajectory's arm joints at its own steps (radians).
     pub fn joint_rmse(&self) -> f64 {
-        (self.joint_se / (self.joint_steps * ARM).max(1) as f64).sqrt()
+        joint_rmse(self.joint_se, self.joint_steps)
     }
+}
+
+/// The RMSE of the arm joints from their squared errors summed over `steps` steps (0 for none).
+pub(super) fn joint_rmse(se: f64, steps: usize) -> f64 {
+    (se / (steps * ARM).max(1) as f64).sqrt()
 }
 
 /// `predictor` imitates `demo` (an episode of `action`): it observes the `task`'s steps

@@ -2,6 +2,7 @@ use std::fmt::Write;
 
 use serde::Serialize;
 
+use super::imitation::joint_rmse;
 use super::{Imitation, Task};
 
 /// One row's performances of one action, summed over demonstrations.
@@ -53,7 +54,7 @@ impl OutcomeSums {
             lift_cm: median(&self.lift_cm),
             object_error_cm: median(&self.object_error_cm),
             path_error_cm: median(&self.path_error_cm),
-            joint_rmse: (self.joint_se / (self.joint_steps * 6).max(1) as f64).sqrt(),
+            joint_rmse: joint_rmse(self.joint_se, self.joint_steps),
         }
     }
 }

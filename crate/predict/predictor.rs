@@ -120,11 +120,7 @@ impl Predictor {
         check_times(target_times)?;
         let mut out = SequencePrediction::empty(self.model.image_size());
         for chunk in target_times.chunks(Self::CHUNK) {
-            let times = Tensor::<2>::from_data(
-                TensorData::new(chunk.to_vec(), [1, chunk.len()]),
-                &self.device,
-            );
-            let p = self.model.decode(representation, times)?;
+            let p = self.model.decode(representation, self.times(chunk))?;
             out.push(
                 chunk,
                 &model::values(p.image_mean),
@@ -157,21 +153,27 @@ impl Predictor {
         target_times: &[f32],
         blend: f32,
     ) -> Result<Vec<[f32; JOINTS]>, ModelError> {
-        let representation = self.encode(observations, blend)?;
         check_times(target_times)?;
+        let representation = self.encode(observations, blend)?;
         let mut rows = Vec::with_capacity(target_times.len());
         for chunk in target_times.chunks(Self::CHUNK) {
-            let times = Tensor::<2>::from_data(
-                TensorData::new(chunk.to_vec(), [1, chunk.len()]),
-                &self.device,
-            );
-            let (mean, _) = self.model.decode_joints(&representation, times)?;
+            let (mean, _) = self
+                .model
+                .decode_joints(&representation, self.times(chunk))?;
             for row in model::values(mean).chunks_exact(JOINTS) {
                 let row: [f32; JOINTS] = std::array::from_fn(|j| row[j]);
                 rows.push(self.normalization.denormalize(&row));
             }
         }
         Ok(rows)
+    }
+
+    /// One chunk of target times as the `[1, M]` tensor the decoders take.
+    fn times(&self, chunk: &[f32]) -> Tensor<2> {
+        Tensor::from_data(
+            TensorData::new(chunk.to_vec(), [1, chunk.len()]),
+            &self.device,
+        )
     }
 
     /// The one-sequence batch of checked `observations` (no targets: only times are known

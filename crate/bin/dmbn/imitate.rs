@@ -17,7 +17,7 @@ use dmbn::sim::{Action, Outcome};
 
 use crate::args::{parse_blend, parse_ids};
 use crate::error::CliError;
-use crate::output::{progress, write_json};
+use crate::output::{model_name, progress, write_json};
 
 #[derive(Clone, Copy, PartialEq, ValueEnum)]
 enum TaskArg {
@@ -85,14 +85,7 @@ pub fn run(args: ImitateArgs) -> Result<(), CliError> {
     let predictors = args
         .models
         .iter()
-        .map(|path| {
-            let p = Predictor::load(path)?;
-            let name = path.file_name().map_or_else(
-                || path.display().to_string(),
-                |n| n.to_string_lossy().into_owned(),
-            );
-            Ok((name, p))
-        })
+        .map(|path| Ok((model_name(path), Predictor::load(path)?)))
         .collect::<Result<Vec<_>, CliError>>()?;
     let dataset = Dataset::open(&args.data)?;
     let in_range =
@@ -124,17 +117,21 @@ pub fn run(args: ImitateArgs) -> Result<(), CliError> {
             args.ids.unwrap_or_default()
         )));
     }
+    let fitted;
     let reference = match args.mean_ids {
-        Some(range) => read(Some(range), demos[0].2.image_size as usize)?,
-        None => Vec::new(),
+        Some(range) => {
+            fitted = read(Some(range), demos[0].2.image_size as usize)?;
+            &fitted
+        }
+        None => demos,
     };
-    let reference = if args.mean_ids.is_some() {
-        &reference
-    } else {
-        demos
-    };
-    let mean = MeanMotion::fit(reference.iter().map(|(_, a, s)| (a.name(), s)))
-        .ok_or_else(|| CliError::Usage(format!("--mean-ids {:?}: no sequence", args.mean_ids)))?;
+    let mean =
+        MeanMotion::fit(reference.iter().map(|(_, a, s)| (a.name(), s))).ok_or_else(|| {
+            CliError::Usage(format!(
+                "--mean-ids {:?}: no sequence in that range",
+                args.mean_ids.unwrap_or_default()
+            ))
+        })?;
 
     let tasks = match args.task {
         TaskArg::Frames => vec![Task::Frames],

@@ -8,6 +8,14 @@ use serde::Serialize;
 use crate::error::CliError;
 
 /// A progress bar of `len` steps labelled `what`.
+/// How a table row names the model file at `path`: its file name (the whole path without one).
+pub fn model_name(path: &Path) -> String {
+    path.file_name().map_or_else(
+        || path.display().to_string(),
+        |n| n.to_string_lossy().into_owned(),
+    )
+}
+
 pub fn progress(len: usize, what: &str) -> ProgressBar {
     let bar = ProgressBar::new(len as u64);
     if let Ok(style) =

@@ -11,7 +11,7 @@ use dmbn::quality::{score_sequence, Accumulator, MeanMotion, QualityReport, Qual
 
 use crate::args::{parse_blend, parse_ids};
 use crate::error::CliError;
-use crate::output::{progress, write_json};
+use crate::output::{model_name, progress, write_json};
 
 #[derive(Clone, Copy, PartialEq, ValueEnum)]
 enum ScenarioArg {
@@ -144,12 +144,8 @@ pub fn run(args: ScoreArgs) -> Result<(), CliError> {
                 }
             }
             bar.finish_and_clear();
-            let name = path.file_name().map_or_else(
-                || path.display().to_string(),
-                |n| n.to_string_lossy().into_owned(),
-            );
             rows.push(QualityRow {
-                name,
+                name: model_name(path),
                 model: true,
                 quality: model.finish(),
             });
