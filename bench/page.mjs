@@ -5,9 +5,10 @@
 // worker, the page's own progressive prediction of a whole episode, and live mode's latency
 // (new observation → first frames / whole forecast of the rest, with the other observations
 // kept encoded in the workers and with nothing kept; longest main-thread task). Saves
-// screenshots of the page mid-prediction to docs/page.png and in live mode to docs/live.png.
+// screenshots of the page mid-prediction to docs/page.png, in live mode to docs/live.png and
+// in imitate mode to docs/imitate.png.
 //
-// Usage: node bench/page.mjs [--runs N] [--no-screenshot]
+// Usage: node bench/page.mjs [--runs N] [--no-screenshot | --screenshots-only]
 //   Needs the web package: wasm-pack build --release --target web --out-dir pkg --no-typescript
 //   Figures are medians: N cold page loads (default 7, own browser context and empty cache
 //   each), 5N one-frame and N 100-step predictions per model. Prints a table and one `json:` line.
@@ -24,11 +25,13 @@ const ROOT = join(dirname(fileURLToPath(import.meta.url)), "..");
 const args = process.argv.slice(2);
 let runs = 7;
 let screenshot = true;
+let measure = true;
 for (let i = 0; i < args.length; i++) {
   if (args[i] === "--runs") runs = Number(args[++i]);
   else if (args[i] === "--no-screenshot") screenshot = false;
+  else if (args[i] === "--screenshots-only") measure = false;
   else {
-    console.log("usage: node bench/page.mjs [--runs N] [--no-screenshot]");
+    console.log("usage: node bench/page.mjs [--runs N] [--no-screenshot | --screenshots-only]");
     process.exit(args[i] === "-h" || args[i] === "--help" ? 0 : 2);
   }
 }
@@ -65,10 +68,59 @@ async function waitState(page, wanted) {
   if (state !== wanted) throw new Error(`page: ${await page.locator("#error").textContent()}`);
 }
 
+/** The README's screenshots: mid-prediction, live mode and imitate mode. */
+async function screenshots() {
+  // Mid-prediction (chunks slowed down so the moment is easy to catch).
+  const context = await browser.newContext({ viewport: { width: 1280, height: 900 } });
+  const page = await context.newPage();
+  await page.goto(`${server.url}www/?action=move&seed=5&model=attn&obs=0,14,29,44,58,72&chunkDelay=250`);
+  await waitState(page, "ready");
+  await page.click("#play");
+  await page.click("#predict");
+  const len = Number(await page.getAttribute("#scrubber", "max")) + 1;
+  await page.waitForFunction((n) => Number(document.body.dataset.progress) >= n, Math.floor(len * 0.45), { timeout: TIMEOUT });
+  await page.locator("#scrubber").fill(String(Math.floor(len * 0.3)));
+  await page.screenshot({ path: join(ROOT, "docs", "page.png"), fullPage: true });
+  await context.close();
+  // Live mode, every model's error curve, 40% into a grasp.
+  const live = await browser.newContext({ viewport: { width: 1280, height: 1100 } });
+  const lp = await live.newPage();
+  await lp.goto(`${server.url}www/?mode=live&action=grasp&seed=11&every=5`);
+  await lp.waitForFunction(() => document.body.dataset.state === "predicted", null, { timeout: TIMEOUT });
+  if ((await lp.getAttribute("#play", "aria-pressed")) === "true") await lp.click("#play");
+  await lp.click("#compare");
+  await lp.waitForFunction(() => Number(document.body.dataset.compared ?? 0) > 0, null, { timeout: 4 * TIMEOUT });
+  const n = Number(await lp.getAttribute("#scrubber", "max")) + 1;
+  await lp.locator("#scrubber").fill(String(Math.floor(n * 0.4)));
+  await lp.waitForFunction(() => document.body.dataset.state === "predicted", null, { timeout: TIMEOUT });
+  await lp.screenshot({ path: join(ROOT, "docs", "live.png"), fullPage: true });
+  await live.close();
+  // Imitate mode: a grasp seen through 5 evenly spaced frames, performed by the arm, near its end.
+  const im = await browser.newContext({ viewport: { width: 1280, height: 940 } });
+  const ip = await im.newPage();
+  await ip.goto(`${server.url}www/?mode=imitate&action=grasp&seed=11&obs=0,12,24,35,47`);
+  await waitState(ip, "ready");
+  if ((await ip.getAttribute("#play", "aria-pressed")) === "true") await ip.click("#play");
+  await ip.click("#predict");
+  await ip.waitForFunction(() => document.body.dataset.performed === "imagined", null, { timeout: TIMEOUT });
+  await ip.locator("#scrubber").fill("40");
+  await ip.screenshot({ path: join(ROOT, "docs", "imitate.png"), fullPage: true });
+  await im.close();
+}
+
 const load = loadavg()[0];
 const server = await serve(ROOT);
 const browser = await launch();
 const result = {};
+if (!measure) {
+  try {
+    await screenshots();
+  } finally {
+    await browser.close();
+    await server.close();
+  }
+  process.exit(0);
+}
 try {
   // Sizes.
   const wasm = readFileSync(wasmFile);
@@ -220,33 +272,7 @@ try {
     await context.close();
   }
 
-  // A screenshot mid-prediction (chunks slowed down so the moment is easy to catch).
-  if (screenshot) {
-    const context = await browser.newContext({ viewport: { width: 1280, height: 900 } });
-    const page = await context.newPage();
-    await page.goto(`${server.url}www/?action=move&seed=5&model=attn&obs=0,14,29,44,58,72&chunkDelay=250`);
-    await waitState(page, "ready");
-    await page.click("#play");
-    await page.click("#predict");
-    const len = Number(await page.getAttribute("#scrubber", "max")) + 1;
-    await page.waitForFunction((n) => Number(document.body.dataset.progress) >= n, Math.floor(len * 0.45), { timeout: TIMEOUT });
-    await page.locator("#scrubber").fill(String(Math.floor(len * 0.3)));
-    await page.screenshot({ path: join(ROOT, "docs", "page.png"), fullPage: true });
-    await context.close();
-    // Live mode, every model's error curve, 40% into a grasp.
-    const live = await browser.newContext({ viewport: { width: 1280, height: 1100 } });
-    const lp = await live.newPage();
-    await lp.goto(`${server.url}www/?mode=live&action=grasp&seed=11&every=5`);
-    await lp.waitForFunction(() => document.body.dataset.state === "predicted", null, { timeout: TIMEOUT });
-    if ((await lp.getAttribute("#play", "aria-pressed")) === "true") await lp.click("#play");
-    await lp.click("#compare");
-    await lp.waitForFunction(() => Number(document.body.dataset.compared ?? 0) > 0, null, { timeout: 4 * TIMEOUT });
-    const n = Number(await lp.getAttribute("#scrubber", "max")) + 1;
-    await lp.locator("#scrubber").fill(String(Math.floor(n * 0.4)));
-    await lp.waitForFunction(() => document.body.dataset.state === "predicted", null, { timeout: TIMEOUT });
-    await lp.screenshot({ path: join(ROOT, "docs", "live.png"), fullPage: true });
-    await live.close();
-  }
+  if (screenshot) await screenshots();
   result.load_average = [round(load, 2), round(loadavg()[0], 2)];
 } finally {
   await browser.close();

@@ -349,15 +349,17 @@ class DmbnPte(_PteEncoders):
 
 class Start:
     """Where the attentive model's decoders start: the observations linearly interpolated to
-    the target times (held outside them), nothing for an unobserved modality."""
+    the target times (held outside them), nothing for an unobserved modality — or, for a model
+    that reads joints from frames, the joints read (`joints`, `joints_read`)."""
 
-    def __init__(self, c, target_times):
+    def __init__(self, c, target_times, joints, joints_read):
         self.weights, self.gaps = interpolation(target_times, c.times, c.mask)
         self.observed = torch.stack([(c.blend > 0).float(), (c.blend < 1).float()], 1)
-        self.c = c
+        self.known = torch.ones_like(self.observed[:, 1]) if joints_read else self.observed[:, 1]
+        self.c, self.start_joints = c, joints
 
     def interpolated_joints(self):
-        return (self.weights @ self.c.joints) * self.observed[:, 1, None, None]
+        return (self.weights @ self.start_joints) * self.known[:, None, None]
 
     def features(self):
         return torch.cat([self.interpolated_joints(), self.gaps], 2)
@@ -411,7 +413,8 @@ class DmbnAttn(_PteEncoders):
     """The attentive model: DMBN-PTE's z per context, cross-attention over the context times
     per target and modality, blended, − P(t_target), + the observed modalities' embedding and
     a projection of where the decoders start; the decoders start from the interpolated
-    observations."""
+    observations (where joints are not observed, those read from the frames by
+    `frame_joints`, when the model has it)."""
 
     def __init__(self, config):
         super().__init__()
@@ -425,10 +428,15 @@ class DmbnAttn(_PteEncoders):
         self.start_projection = nn.Linear(START_FEATURES, h)
         self.decoder = Decoder(h, image_decoder_shape(config), config["sigma_floor"],
                                gated=True)
+        self.frame_joints = nn.Linear(h, JOINTS) if config.get("frame_joints") else None
 
     def encode(self, c):
         image, joint = self.encode_contexts(c)
-        return {"contexts": c, "image": image, "joint": joint,
+        joints = c.joints
+        if self.frame_joints is not None:
+            observed = (c.blend < 1).float()[:, None, None]
+            joints = c.joints * observed + self.frame_joints(image) * (1 - observed)
+        return {"contexts": c, "image": image, "joint": joint, "joints": joints,
                 "keys": self.time_embedding(c.times)}
 
     def decode(self, r, target_times):
@@ -437,7 +445,7 @@ class DmbnAttn(_PteEncoders):
         padding = c.mask < 0.5
         image = self.image_attention(queries, r["keys"], r["image"], padding)
         joint = self.joint_attention(queries, r["keys"], r["joint"], padding)
-        start = Start(c, target_times)
+        start = Start(c, target_times, r["joints"], self.frame_joints is not None)
         x = (blend(image, joint, c.blend) - self.time(target_times)
              + (start.observed @ self.observed).unsqueeze(1)
              + self.start_projection(start.features()))

@@ -440,6 +440,68 @@ fn a_coarse_tail_is_saved_with_the_model_and_decodes_full_size_frames() {
     assert!(prediction_diff(&p, &as_fine.forward(&t).unwrap()) > 1e-4);
 }
 
+/// An attentive model that reads joints from frames: with a read-out that reads nothing yet
+/// it predicts exactly as without one (`train --init --frame-joints` continues a file); once
+/// it reads something, frames-only predictions start from what it reads while predictions
+/// with joints observed stay as they were; it is saved and read back with its read-out; other
+/// kinds refuse one.
+#[test]
+fn frame_joints_start_frames_only_predictions_from_the_joints_read() {
+    let device = device();
+    let plain = model(ModelKind::Attn, 64, &device);
+    let reading = plain.clone().reading_frame_joints(&device).unwrap();
+    assert_eq!(reading.config().frame_joints, Some(true));
+    let b = batch(2, 3, 4, 64, 5);
+    let predict = |m: &Model, blend: f32| {
+        let mut b = b.clone();
+        b.blend = vec![blend; 2];
+        m.forward(&tensors(&b, &device).unwrap()).unwrap()
+    };
+    for blend in [1.0, 0.5, 0.0] {
+        assert_eq!(
+            prediction_diff(&predict(&plain, blend), &predict(&reading, blend)),
+            0.0,
+            "blend {blend}"
+        );
+    }
+    let mut read = reading.clone();
+    let dmbn::model::Network::Attn(net) = &mut read.network else {
+        unreachable!()
+    };
+    let layer = net.frame_joints.as_mut().unwrap();
+    let dims = layer.weight.dims();
+    layer.weight = burn::module::Param::from_tensor(Tensor::random(
+        dims,
+        burn::tensor::Distribution::Uniform(-0.3, 0.3),
+        &device,
+    ));
+    let frames_only = max_abs_diff(
+        &predict(&reading, 1.0).joint_mean,
+        &predict(&read, 1.0).joint_mean,
+    );
+    assert!(frames_only > 1e-2, "{frames_only}");
+    for blend in [0.5, 0.0] {
+        assert_eq!(
+            prediction_diff(&predict(&reading, blend), &predict(&read, blend)),
+            0.0,
+            "blend {blend}"
+        );
+    }
+    let bytes = save_bytes(&read, &Normalization::identity(), false).unwrap();
+    let (config, _) = reads_back_exactly(&read, &bytes, &device);
+    assert_eq!(config.frame_joints, Some(true));
+    // DMBN-PTE has no attention to start from what it reads.
+    let pte = model(ModelKind::Pte, 64, &device);
+    let err = pte.reading_frame_joints(&device).err().unwrap();
+    assert!(err.to_string().contains("frame_joints"), "{err}");
+    let err = ModelConfig::new(ModelKind::Pte)
+        .with_frame_joints(Some(true))
+        .init(&device)
+        .err()
+        .unwrap();
+    assert!(err.to_string().contains("frame_joints"), "{err}");
+}
+
 /// Rebuilds a file from a header and a weight section (the checksum and length follow the
 /// weights unless the header says otherwise).
 fn assemble(header: &serde_json::Value, weights: &[u8]) -> Vec<u8> {

@@ -390,7 +390,7 @@ fn bad_settings_are_refused() {
 }
 
 #[test]
-fn init_starts_from_a_model_files_weights_and_normalisation() {
+fn init_starts_from_a_model_files_weights_with_the_runs_normalisation() {
     let tmp = tempfile::tempdir().unwrap();
     let (data, other) = (tmp.path().join("data"), tmp.path().join("other"));
     dataset(&data, 2);
@@ -401,17 +401,18 @@ fn init_starts_from_a_model_files_weights_and_normalisation() {
         .unwrap()
         .run(|_| {})
         .unwrap();
-    let run = |init: Option<&Path>, name: &str| {
+    let run = |on: &Path, init: Option<&Path>, name: &str| {
         let mut config = small(ModelKind::Pte, 1);
         // (A step this small leaves the weights as they start.)
         config.lr = 1e-12;
         config.init = init.map(Path::to_path_buf);
         let out = tmp.path().join(name);
-        new_trainer(&other, &out, config)
-            .unwrap()
-            .run(|_| {})
-            .unwrap();
-        final_prediction(&out)
+        new_trainer(on, &out, config).unwrap().run(|_| {}).unwrap();
+        out
+    };
+    let normalization = |out: &Path| {
+        let bytes = std::fs::read(out.join("model.dmbn")).unwrap();
+        read_header(&bytes).unwrap().normalization
     };
     let before = final_prediction(&first);
     let largest = |a: &[f32], b: &[f32]| {
@@ -420,11 +421,22 @@ fn init_starts_from_a_model_files_weights_and_normalisation() {
             .map(|(x, y)| (x - y).abs())
             .fold(0.0f32, f32::max)
     };
-    let continued = run(Some(&first.join("model.dmbn")), "continued");
-    assert!(largest(&before.image_mean, &continued.image_mean) < 1e-4);
-    assert!(largest(&before.joint_mean, &continued.joint_mean) < 1e-4);
-    let fresh = run(None, "fresh");
-    assert!(largest(&before.joint_mean, &fresh.joint_mean) > 1e-3);
+    let init = first.join("model.dmbn");
+    // On the file's own data: the file's model, normalisation included.
+    let continued = run(&data, Some(&init), "continued");
+    assert_eq!(normalization(&continued), normalization(&first));
+    let after = final_prediction(&continued);
+    assert!(largest(&before.image_mean, &after.image_mean) < 1e-4);
+    assert!(largest(&before.joint_mean, &after.joint_mean) < 1e-4);
+    // On other data: the data's normalisation (as a fresh run's, not the file's), the file's
+    // weights (not a fresh run's).
+    let tuned = run(&other, Some(&init), "tuned");
+    let fresh = run(&other, None, "fresh");
+    assert_ne!(normalization(&tuned), normalization(&first));
+    assert_eq!(normalization(&tuned), normalization(&fresh));
+    let (tuned, fresh) = (final_prediction(&tuned), final_prediction(&fresh));
+    assert!(largest(&tuned.image_mean, &fresh.image_mean) > 1e-3);
+    assert!(largest(&before.joint_mean, &tuned.joint_mean) > 1e-3);
     // A file of another kind is refused, naming the setting.
     let mut wrong = small(ModelKind::Dmbn, 1);
     wrong.init = Some(first.join("model.dmbn"));

@@ -11,7 +11,7 @@ mod golden_prediction;
 mod golden_score;
 
 use dmbn::web::{
-    heat_map, perform, placement_region, replay, run_episode, Episode, Folder, ModelHandle,
+    enact, heat_map, perform, placement_region, replay, run_episode, Episode, Folder, ModelHandle,
     Prediction, Simulator,
 };
 use wasm_bindgen::{JsError, JsValue};
@@ -561,6 +561,13 @@ fn imitation_matches_native() {
         let object = ep.object();
         let performed = perform(&want.trajectory, object[0], object[1], 64).unwrap();
         assert_eq!(performed.digest(), want.performance_digest);
+        // And enacted against the demonstration (the page's path), judged as natively.
+        let e = enact(&ep, action.into(), &want.trajectory, &i.observed()).unwrap();
+        assert_eq!(e.performance().digest(), want.performance_digest);
+        let outcome: serde_json::Value =
+            serde_wasm_bindgen::from_value(e.outcome().unwrap()).unwrap();
+        assert_eq!(outcome["success"].as_bool().unwrap(), want.success);
+        assert_eq!(e.observed(), i.observed());
     }
     let r = replay(&ep, action.into()).unwrap();
     assert_eq!(r.performance().digest(), golden.replay_digest);
@@ -596,6 +603,11 @@ fn bad_imitation_arguments_throw() {
     let ok = ep.joints();
     assert!(message(perform(&ok, 5.0, 0.5, 64).err().unwrap()).contains("placement region"));
     assert!(message(replay(&ep, "jump".into()).err().unwrap()).contains("unknown action"));
+    let enacted = |t: &[f32], observed: &[u32]| enact(&ep, "grasp".into(), t, observed);
+    assert!(message(enacted(&ok[..70], &[]).err().unwrap()).contains("rows"));
+    assert!(message(enacted(&[f32::NAN; 7], &[]).err().unwrap()).contains("NaN"));
+    assert!(message(enacted(&ok, &[0, 9999]).err().unwrap()).contains("observed step 9999"));
+    assert!(enacted(&ok, &[0, 10]).unwrap().outcome().is_ok());
     // Still usable afterwards.
     assert!(model
         .imitate(&ep, "grasp".into(), "frames".into(), 5.0, 1.0)

@@ -59,7 +59,7 @@ export function render() {
   // Live mode's panels show the last finished forecast until the next one finishes.
   const panels = live ? heldForecast() : p;
   ui.counter.textContent = `step ${step} / ${shown.len - 1} · t = ${shown.times[step].toFixed(3)}`;
-  ui.trueLabel.textContent = shown.mode === "t" ? "" : `mode ${shown.mode}`;
+  ui.trueLabel.textContent = ["t", "imitate"].includes(shown.mode) ? "" : `mode ${shown.mode}`;
   state.timelineAt = drawTimeline(ui.timeline, {
     len: shown.len,
     size: shown.size,
@@ -75,6 +75,7 @@ export function render() {
     observed: (live && panels?.steps) || observedSteps(),
     step,
     prediction: panels,
+    labels: shown.mode === "imitate" ? { truth: "demonstrated", mean: "imagined mean" } : undefined,
   });
   if (p?.count) firstDrawn(p);
 }
@@ -88,6 +89,10 @@ function drawFrames() {
   const has = p && p.done[at];
   const trueFrame = ui.frameTrue.getContext("2d");
   trueFrame.putImageData(shown.images[step], 0, 0);
+  if (shown.mode === "imitate") {
+    drawPerformance();
+    return;
+  }
   if (has) {
     const px = p.size * p.size;
     const mean = rgbImage(p.mean, p.size, at * px * 3);
@@ -108,6 +113,22 @@ function drawFrames() {
       ? "this step is not predicted yet"
       : "no prediction yet: choose observations, then Predict";
   if (live) ui.predLabel.textContent = has ? `forecast of step ${at}` : "";
+}
+
+/** Imitate mode: the frame of the arm's performance at the step shown, in step with the demonstration. */
+function drawPerformance() {
+  const { performance: perf, prediction: p, step } = state;
+  const has = Boolean(perf) && step < perf.len;
+  if (has) {
+    const px = state.shown.size * state.shown.size * 3;
+    ui.framePred.getContext("2d").putImageData(rgbImage(perf.frames, state.shown.size, step * px), 0, 0);
+  } else clearFrame(ui.framePred);
+  // No σ over a performance: the overlay left transparent.
+  ui.sigmaMap.getContext("2d").clearRect(0, 0, ui.sigmaMap.width, ui.sigmaMap.height);
+  const stack = ui.framePred.parentElement;
+  stack.classList.toggle("empty", !has);
+  stack.dataset.empty = p && !p.complete ? "imagining its joints…" : "no performance yet: choose observations, then Predict";
+  ui.predLabel.textContent = perf ? (perf.source === "imagined" ? "imagined joints" : "demonstration's joints") : "";
 }
 
 /** The forecast frame as a ghost over the true one: where the arm is going. */

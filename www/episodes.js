@@ -91,8 +91,14 @@ export function buildShown() {
   const mode = ui.mode.value;
   ui.freeze.hidden = mode !== "f";
   ui.live.hidden = ui.errorPanel.hidden = mode !== "live";
-  // Live mode observes the episode as it is (t), step by step.
-  const sequence = mode === "live" ? "t" : mode;
+  const imitate = mode === "imitate";
+  ui.imitatePanel.hidden = !imitate;
+  ui.sigmaPanel.hidden = imitate;
+  ui.trueCaption.textContent = imitate ? "Demonstration" : "True frame";
+  ui.predCaption.textContent = imitate ? "The robot's performance" : "Predicted mean ";
+  if (!imitate) ui.predCaption.insertAdjacentHTML("beforeend", '<span class="muted">+ σ heat map</span>');
+  // Live mode observes the episode as it is (t), step by step; imitate mode shows it as is.
+  const sequence = mode === "live" || imitate ? "t" : mode;
   let ev;
   try {
     const from = clampInt(ui.freezeFrom.value, 0, episode.len - 1);

@@ -16,6 +16,8 @@ const NARROW = 560;
 const GAP = { x: 14, y: 12 };
 const PAD = { left: 40, right: 6, top: 18, bottom: 16 };
 const TRUE = "#e6e9ef";
+/** The legend's names of the true curve and the predicted mean, unless told others. */
+const LABELS = { truth: "true (shown)", mean: "predicted mean" };
 
 /** Per canvas: what its panels were last drawn from. */
 const drawnFrom = new WeakMap();
@@ -25,7 +27,8 @@ const drawnFrom = new WeakMap();
  * into `cursor`, a transparent canvas over it: the panels are redrawn only when the data
  * change, so that playback redraws the cursors alone.
  * `data`: {len, joints (T×7 true), observed (sorted steps), step, prediction: null or
- * {done (Uint8Array T), jointMean, jointSigma, count}}. Returns a function mapping a client x to a step.
+ * {done (Uint8Array T), jointMean, jointSigma, count}, labels: optional legend names {truth, mean}
+ * (imitate mode: demonstrated, imagined)}. Returns a function mapping a client x to a step.
  */
 export function drawJoints(canvas, cursor, data) {
   const { w, h } = cssSize(canvas);
@@ -39,11 +42,12 @@ export function drawJoints(canvas, cursor, data) {
     cells.push({ x: (j % cols) * (cw + GAP.x), y: Math.floor(j / cols) * (ch + GAP.y), w: cw, h: ch });
   }
   const p = data?.prediction;
-  const key = [window.devicePixelRatio, w, h, data?.len, data?.joints, data?.observed.join(","), p, p?.count];
+  const labels = data?.labels ?? LABELS;
+  const key = [window.devicePixelRatio, w, h, data?.len, data?.joints, data?.observed.join(","), p, p?.count, labels.truth];
   const last = drawnFrom.get(canvas);
   if (!last || key.some((v, i) => v !== last[i])) {
     const { g } = fit(canvas);
-    drawLegend(g, cells[JOINTS]);
+    drawLegend(g, cells[JOINTS], labels);
     if (data && data.len >= 1) for (let j = 0; j < JOINTS; j++) drawJoint(g, cells[j], j, data);
     drawnFrom.set(canvas, key);
   }
@@ -183,11 +187,11 @@ function drawCursor(g, cell, { len, step }) {
   g.stroke();
 }
 
-function drawLegend(g, cell) {
+function drawLegend(g, cell, labels) {
   if (!cell) return;
   const items = [
-    ["true (shown)", (x, y) => dashed(g, x, y)],
-    ["predicted mean", (x, y) => line(g, x, y, "#4dabf7", 2)],
+    [labels.truth, (x, y) => dashed(g, x, y)],
+    [labels.mean, (x, y) => line(g, x, y, "#4dabf7", 2)],
     ["mean ± 2σ", (x, y) => band(g, x, y)],
     ["observed", (x, y) => dot(g, x + 9, y)],
   ];

@@ -2,6 +2,7 @@
 
 import { BLENDS, CHUNK, CHUNK_DELAY, MODEL_NAMES, MODELS } from "./config.js";
 import { render, renderSoon, shownStep } from "./draw.js";
+import { clearPerformances, performImagined } from "./imitate.js";
 import { forecastDone, forecastNow } from "./live.js";
 import { loadModel, selectModel } from "./models.js";
 import { observedSteps } from "./observations.js";
@@ -14,6 +15,7 @@ export function cancelPrediction() {
   if (state.prediction && !state.prediction.complete) state.prediction.cancel?.();
   state.prediction = null;
   ui.predLabel.textContent = "";
+  clearPerformances();
 }
 
 /** Settings changed: predict again when live, otherwise drop the outdated prediction. */
@@ -188,6 +190,8 @@ function finish(p, reply) {
   p.workerMs = reply.ms;
   p.encoded = reply.encoded;
   if (mode === "live") forecastDone(p);
+  // Imitate mode: the arm performs the joints imagined (before the counter below moves).
+  if (mode === "imitate") performImagined(p);
   // A counter that automation can wait on: it changes with every finished prediction.
   document.body.dataset.predictions = String(Number(document.body.dataset.predictions ?? 0) + 1);
   state.timings.prediction = {
@@ -210,7 +214,8 @@ function finish(p, reply) {
     `first ${p.first !== null ? 1 : Math.min(p.chunk, len)} after ${Math.round(p.firstMs)} ms · ${reply.workers} worker${reply.workers > 1 ? "s" : ""}`;
   ui.timing.title = `${MODEL_NAMES[model]}, mode ${mode}, ${observe}, ${p.observed} observed steps; encoding ${Math.round(reply.encodeMs)} ms`;
   render();
-  settle();
+  // A performance that failed keeps its message up (state error); the prediction stays drawn.
+  if (mode !== "imitate" || state.imagined) settle();
 }
 
 /** For bench/page.mjs: times `n` target steps (evenly spaced phases) with model `model` (an id of

@@ -32,6 +32,13 @@ export const state = {
   curves: { key: "", byModel: new Map(), version: 0 },
   /** Live mode: the running model comparison, {stop}, or null. */
   comparing: null,
+  /**
+   * Imitate mode: the arm's performances, {source, len, frames, outcome, jointRmse, observed, ms}
+   * (imitate.js): of the joints the model imagined, of the demonstration's own, and the one drawn.
+   */
+  imagined: null,
+  demonstration: null,
+  performance: null,
   /** Once a prediction has been asked for, any change of settings predicts again. */
   live: false,
   /** Model ids whose weights the workers hold. */

@@ -17,6 +17,7 @@ export function readUrl() {
   set(ui.seed, "seed");
   set(ui.model, "model");
   set(ui.mode, "mode");
+  if (ui.mode.value === "imitate") ui.observe.value = "images";
   set(ui.observe, "observe");
   set(ui.k, "k");
   set(ui.freezeFrom, "from");

@@ -6,6 +6,7 @@ import { droppedFiles, openFolder, pickedFiles, sequenceChosen } from "./folder.
 import { selectModel } from "./models.js";
 import { chooseFirst, chooseRandom, updateObsInfo } from "./observations.js";
 import { pause, play, toggle } from "./playback.js";
+import { toggleDemonstration } from "./imitate.js";
 import { compareModels, forecastNow, redrawErrors, takeRule } from "./live.js";
 import { cancelPrediction, invalidate, predict } from "./prediction.js";
 import { state } from "./state.js";
@@ -116,6 +117,8 @@ export function wire() {
   const modeChanged = () => {
     if (!state.episode) return;
     const wasLive = state.shown?.mode === "live";
+    // The mirror sees frames only unless the viewer says otherwise.
+    if (ui.mode.value === "imitate" && state.shown?.mode !== "imitate") ui.observe.value = "images";
     if (buildShown()) {
       clearError();
       updateObsInfo();
@@ -145,6 +148,13 @@ export function wire() {
   ui.ahead.addEventListener("change", () => (writeUrl(), render()));
   ui.ghost.addEventListener("change", () => (writeUrl(), render()));
   ui.compare.addEventListener("click", () => compareModels());
+  ui.replay.addEventListener("click", () => {
+    if (!state.episode || state.fatal) return;
+    clearError();
+    toggleDemonstration();
+    render();
+    if (state.performance) settle();
+  });
   ui.sigmaToggle.addEventListener("change", sigmaOverlay);
   ui.sigmaOpacity.addEventListener("input", sigmaOverlay);
   ui.play.addEventListener("click", toggle);

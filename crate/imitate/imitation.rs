@@ -64,11 +64,23 @@ pub fn imitate(
 
 /// The ceiling: the demonstration's own recorded joints performed.
 pub fn replay(demo: &Sequence, action: Action) -> Result<Imitation, ImitateError> {
+    enact(demo, action, demo.joints.clone(), Vec::new())
+}
+
+/// The arm performs `rows`, one per step of `demo` (joint means a model predicted from the
+/// demonstration's `observed` steps elsewhere: the page's workers), with the object where the
+/// demonstration had it, judged against it.
+pub fn enact(
+    demo: &Sequence,
+    action: Action,
+    rows: Vec<[f32; JOINTS]>,
+    observed: Vec<usize>,
+) -> Result<Imitation, ImitateError> {
     let steps = TaskSteps {
-        observed: Vec::new(),
+        observed,
         predicted_from: 0,
     };
-    act(demo, action, steps, demo.joints.clone())
+    act(demo, action, steps, rows)
 }
 
 /// The floor: the action's mean motion performed (after the observed part as recorded, for
@@ -116,7 +128,8 @@ fn act(
     let from = steps.predicted_from;
     if demo.is_empty() || rows.len() + from != demo.len() {
         return Err(ImitateError::Invalid(format!(
-            "{} rows after {from} recorded ones for a demonstration of {} steps",
+            "{} trajectory rows after {from} recorded ones for a demonstration of {} steps: \
+             expected one row per step",
             rows.len(),
             demo.len()
         )));

@@ -10,7 +10,7 @@ mod report;
 mod task;
 
 pub use error::ImitateError;
-pub use imitation::{imitate, mean_motion, replay, Imitation};
+pub use imitation::{enact, imitate, mean_motion, replay, Imitation};
 pub use report::{ImitationReport, ImitationRow, OutcomeSums};
 pub use task::Task;
 pub use task::TaskSteps;

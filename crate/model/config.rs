@@ -106,6 +106,11 @@ pub struct ModelConfig {
     /// [`encoder_filters`]); a narrower encoder encodes an observation with fewer
     /// multiply-adds (live mode encodes each new one before it forecasts).
     pub encoder_filters: Option<Vec<usize>>,
+    /// The attentive model: `Some(true)` reads the joints from each observed frame (a linear
+    /// head on its image context encoding), and where joints are not observed (frames only)
+    /// the joint decoder starts from those, interpolated as observed joints would be, instead
+    /// of from nothing. Absent (older files) or false: it starts from nothing.
+    pub frame_joints: Option<bool>,
 }
 
 impl ModelConfig {
@@ -116,6 +121,10 @@ impl ModelConfig {
         if self.hidden == 0 {
             return Err(ModelError::config("hidden", "is 0: expected at least 1"));
         }
+        if self.frame_joints == Some(true) && self.kind != ModelKind::Attn {
+            return Err(frame_joints_refused(self.kind));
+        }
+
         if self.kind == ModelKind::Attn {
             check_heads(self.attention_heads(), self.hidden)?;
         }
@@ -224,6 +233,14 @@ fn image_size_error(image_size: usize) -> ModelError {
     ModelError::config(
         "image_size",
         format!("is {image_size}: expected one of {IMAGE_SIZES:?}"),
+    )
+}
+
+/// The error for joints read from frames asked of a network without attention.
+pub(super) fn frame_joints_refused(kind: ModelKind) -> ModelError {
+    ModelError::config(
+        "frame_joints",
+        format!("is set for a {kind} model: only the attentive model reads joints from frames"),
     )
 }
 

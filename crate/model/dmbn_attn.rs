@@ -11,6 +11,8 @@ use super::image_encoder::ImageEncoder;
 use super::joint_encoder::JointEncoder;
 use super::time_embedding::{TimeEmbedding, TimeEmbeddingConfig};
 use super::time_projection::TimeProjection;
+use crate::data::JOINTS;
+
 use super::{
     AttentiveContexts, BatchTensors, EncodedContexts, ModelConfig, ModelError, ModelKind,
     Prediction, Start,
@@ -59,6 +61,9 @@ pub struct DmbnAttn {
     pub start_projection: Linear,
     /// Shared layer, image and joint decoders.
     pub decoder: Decoder,
+    /// H → 7: the joints read from an image context encoding, where the joint decoder starts
+    /// when joints are not observed (the mirror: frames only). None in files without it.
+    pub frame_joints: Option<Linear>,
 }
 
 impl DmbnAttn {
@@ -96,8 +101,29 @@ impl DmbnAttn {
                     .with_gated(true)
                     .init(device),
             ),
+            frame_joints: (config.frame_joints == Some(true))
+                .then(|| reading_nothing(hidden, device)),
         })
     }
+
+    /// The network with a joint read-out from frames ([`DmbnAttn::frame_joints`]) that reads
+    /// nothing yet (the mean joints): it predicts as before, and training teaches the
+    /// read-out. A network that has one keeps it.
+    pub fn reading_frame_joints(mut self, device: &Device) -> DmbnAttn {
+        if self.frame_joints.is_none() {
+            let hidden = self.start_projection.weight.dims()[1];
+            self.frame_joints = Some(reading_nothing(hidden, device));
+        }
+        self
+    }
+}
+
+/// A read-out `hidden → 7` of zeros: joints read as the mean joints (0 normalised), where a
+/// model without one starts. Its weights still get gradient, from the encodings it reads.
+fn reading_nothing(hidden: usize, device: &Device) -> Linear {
+    let mut layer = super::init::dense(hidden, JOINTS, device);
+    layer.weight = Param::from_tensor(Tensor::zeros([hidden, JOINTS], device));
+    layer
 }
 
 impl DmbnAttn {
@@ -120,10 +146,24 @@ impl DmbnAttn {
     /// [`DmbnAttn::condition`].
     pub fn represent(&self, contexts: &EncodedContexts, c: Tensor<1>) -> AttentiveContexts {
         let encodings = contexts.encodings();
+        let joints = match &self.frame_joints {
+            // The observed joints where joints are observed, those read elsewhere.
+            Some(read_out) => {
+                let read = read_out.forward(encodings.image.clone());
+                let observed = c
+                    .clone()
+                    .lower_elem(1.0)
+                    .float()
+                    .unsqueeze_dims::<3>(&[1, 2]);
+                contexts.joints().clone() * observed.clone() + read * observed.neg().add_scalar(1.0)
+            }
+            None => contexts.joints().clone(),
+        };
         AttentiveContexts {
             times: contexts.times().clone(),
             frames: contexts.frames().clone(),
-            joints: contexts.joints().clone(),
+            joints,
+            joints_read: self.frame_joints.is_some(),
             image: encodings.image.clone(),
             joint: encodings.joint.clone(),
             keys: self.time_embedding.forward(contexts.times().clone()),

@@ -57,6 +57,19 @@ impl Model {
         &self.config
     }
 
+    /// An attentive model that reads joints from frames (`ModelConfig::frame_joints`): one
+    /// without a read-out gets one that reads nothing yet, so it predicts as before (training
+    /// a shipped file on with `train --init --frame-joints`). Fails for another kind.
+    pub fn reading_frame_joints(self, device: &Device) -> Result<Model, ModelError> {
+        match self.network {
+            Network::Attn(net) => Ok(Model {
+                network: Network::Attn(net.reading_frame_joints(device)),
+                config: self.config.with_frame_joints(Some(true)),
+            }),
+            _ => Err(super::config::frame_joints_refused(self.config.kind)),
+        }
+    }
+
     /// Draws every weight now. burn draws a fresh model's weights lazily, on first use, from a
     /// generator shared by every thread; drawing them right after seeding makes the seed alone
     /// decide them.

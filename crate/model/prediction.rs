@@ -38,8 +38,13 @@ pub struct AttentiveContexts {
     pub times: Tensor<2>,
     /// `[B, N, 3, S, S]`: context frames.
     pub frames: Tensor<5>,
-    /// `[B, N, 7]`: context joints, normalised.
+    /// `[B, N, 7]`: the joints the decoders start from at each context, normalised: the
+    /// observed ones where joints are observed (c < 1); elsewhere, for a model that reads them
+    /// (`frame_joints`), those read from the context's frame.
     pub joints: Tensor<3>,
+    /// Whether `joints` holds joints read from the frames where joints are not observed
+    /// (otherwise the decoders start from nothing there).
+    pub joints_read: bool,
     /// `[B, N, H]`: image context encodings z_image.
     pub image: Tensor<3>,
     /// `[B, N, H]`: joint context encodings z_joint.

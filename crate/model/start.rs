@@ -21,7 +21,10 @@ pub struct Start {
     gaps: Tensor<3>,
     /// `[B, 2]`: 1 where frames (column 0) and joints (column 1) are observed, else 0.
     observed: Tensor<2>,
-    /// `[B, N, 3, S, S]` and `[B, N, 7]`: the observations.
+    /// `[B, 1]`: 1 where the joints start from something (observed, or read from the frames).
+    joints_known: Tensor<2>,
+    /// `[B, N, 3, S, S]` and `[B, N, 7]`: the observations (the joints: or those read from
+    /// the frames, see [`AttentiveContexts::joints`]).
     frames: Tensor<5>,
     joints: Tensor<3>,
 }
@@ -41,7 +44,8 @@ pub struct FrameStart {
 /// The joints a joint decoder starts from: mean = joints + scale · correction.
 #[derive(Debug, Clone)]
 pub struct JointStart {
-    /// `[K, 7]`: the interpolated context joints, normalised (0 where not observed).
+    /// `[K, 7]`: the interpolated context joints, normalised (where not observed: read from
+    /// the frames, or 0).
     pub joints: Tensor<2>,
     /// `[K, 1]`: how much of the correction applies: 0 at an observed step, towards 1 away
     /// from the observations (1 where the joints are not observed).
@@ -62,10 +66,17 @@ impl Start {
             ],
             1,
         );
+        let [b, _] = observed.dims();
+        let joints_known = if contexts.joints_read {
+            Tensor::ones([b, 1], &observed.device())
+        } else {
+            observed.clone().narrow(1, 1, 1)
+        };
         Start {
             weights,
             gaps,
             observed,
+            joints_known,
             frames: contexts.frames.clone(),
             joints: contexts.joints.clone(),
         }
@@ -77,7 +88,7 @@ impl Start {
     }
 
     /// What the decoder is told about where it starts, `[B, M, 9]`: the interpolated joints
-    /// (normalised, 0 where not observed) and the gaps before and after each target, so that
+    /// (normalised; read from the frames, or 0, where not observed) and the gaps before and after each target, so that
     /// the correction it adds depends on what it corrects and on how far the observations are.
     pub fn features(&self) -> Tensor<3> {
         Tensor::cat(vec![self.interpolated_joints(), self.gaps.clone()], 2)
@@ -109,9 +120,10 @@ impl Start {
         }
     }
 
-    /// `[B, M, 7]`: the context joints interpolated to the targets, 0 where not observed.
+    /// `[B, M, 7]`: the context joints interpolated to the targets, 0 where there are none.
     fn interpolated_joints(&self) -> Tensor<3> {
-        self.weights.clone().matmul(self.joints.clone()) * self.column(1).unsqueeze_dim::<3>(2)
+        self.weights.clone().matmul(self.joints.clone())
+            * self.joints_known.clone().unsqueeze_dim::<3>(2)
     }
 
     /// `[B, M]`: e^(−d / width), d the distance to the nearest observation.

@@ -100,9 +100,9 @@ pub struct TrainConfig {
     /// Time-warp augmentation of training sequences (the paper's, for DMBN-PTE), or none.
     #[serde(default)]
     pub augment: Option<TimeWarpConfig>,
-    /// A model file whose weights and joint normalisation the run starts from (fine-tuning,
-    /// or training a shipped model longer), instead of fresh weights; its model config must
-    /// be `model`'s kind and frame size.
+    /// A model file whose weights the run starts from (fine-tuning, or training a shipped
+    /// model longer), instead of fresh weights; its model config must be `model`'s kind and
+    /// frame size. The joint normalisation is fitted on the run's training data either way.
     #[serde(default)]
     pub init: Option<PathBuf>,
     /// Write the final and best models with f16 weights (half the size); kept with the

@@ -67,25 +67,35 @@ impl Trainer {
         let split = Split::load(data, config.model.image_size, config.val_fraction)?;
         let device = training_device();
         device.seed(config.seed);
-        let (model, normalization) = match &config.init {
+        let model = match &config.init {
             Some(path) => {
                 let bytes = std::fs::read(path).map_err(TrainError::io(path))?;
-                let (model, normalization, _) = model::load_bytes_expecting(
+                let model = model::load_bytes_expecting(
                     &bytes,
                     &device,
                     Some(config.model.kind),
                     Some(config.model.image_size),
                 )
-                .map_err(|e| TrainError::config("init", format!("{}: {e}", path.display())))?;
-                (model, normalization)
+                .map_err(|e| TrainError::config("init", format!("{}: {e}", path.display())))?
+                .0;
+                // A read-out of joints from frames asked for, which the file may lack.
+                if config.model.frame_joints == Some(true) {
+                    model.reading_frame_joints(&device)?
+                } else {
+                    model
+                }
             }
             None => {
                 let model = config.model.init(&device)?;
                 model.draw_weights();
-                let joints = split.train.iter().flat_map(|s| s.joints.iter());
-                (model, Normalization::fit(joints))
+                model
             }
         };
+        // Fitted on the training data even when starting from a file: the same as the file's
+        // for a run on that file's data, and right for other data (the original DMBN data's
+        // joints lie radians away from the simulator's: the file's statistics would feed the
+        // network values hundreds of σ off).
+        let normalization = Normalization::fit(split.train.iter().flat_map(|s| s.joints.iter()));
         let log = MetricsLog::open(&out.join("metrics.jsonl"), Some(0))?;
         let optim = optimizer(&config);
         let state = CheckpointState {

@@ -89,6 +89,31 @@ pub fn replay(
     Ok(imitate::replay(episode.sequence(), action)?.into())
 }
 
+/// `enact(episode, action, trajectory, observed)`: the arm performs `trajectory`, a
+/// `Float32Array(T × 7)` with a row per step of the demonstration `episode` (joint means
+/// predicted from its `observed` steps, a `Uint32Array`, by the page's workers), with the
+/// object where the demonstration had it, judged against it. Throws on a bad trajectory (a row
+/// count other than the episode's, NaN, an angle beyond ±2π) or an observed step past its end.
+#[wasm_bindgen]
+pub fn enact(
+    episode: &Episode,
+    #[wasm_bindgen(unchecked_param_type = "string")] action: JsValue,
+    trajectory: &[f32],
+    observed: &[u32],
+) -> Result<Imitation, JsError> {
+    let action = parse_action(&action)?;
+    let demo = episode.sequence();
+    let rows = Trajectory::from_flat(trajectory)?.rows().to_vec();
+    let observed: Vec<usize> = observed.iter().map(|&k| k as usize).collect();
+    if let Some(k) = observed.iter().find(|&&k| k >= demo.len()) {
+        return Err(JsError::new(&format!(
+            "observed step {k} is past the demonstration's {} steps",
+            demo.len()
+        )));
+    }
+    Ok(imitate::enact(demo, action, rows, observed)?.into())
+}
+
 /// `perform(trajectory, x, y, imageSize)`: the arm performs any `Float32Array(T × 7)` of joint
 /// rows (6 angles in rad, the gripper value) with the object at `(x, y)`, as the native
 /// simulator does; returns the recorded `Episode`. Throws on a bad trajectory (a row count

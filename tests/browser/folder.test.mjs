@@ -136,6 +136,13 @@ describe("open a dataset", () => {
     await predict(page);
     await shot(page, "folder-2020");
     assert.deepEqual(page.problems, []);
+    // The simulated arm cannot perform a real arm's joints: imitate mode says so.
+    await page.selectOption("#mode", "imitate");
+    assert.equal(await page.inputValue("#observe"), "images");
+    await waitState(page, "error");
+    assert.match(await errorText(page), /original DMBN data, recorded on a real arm/);
+    assert.equal(await page.textContent("#outcome"), "no performance yet");
+    assert.equal(page.problems.length, 1, "the message, logged once");
     await close(page);
   });
 });

@@ -15,6 +15,8 @@ export const ARTIFACTS = join(ROOT, "artifacts", "browser");
 export const TIMEOUT = 60_000;
 
 let browser;
+/** The server's virtual files by path: a test may add its own before it opens a page. */
+export const virtualFiles = {};
 /** The static server of the repository root (its `url` ends with a slash). */
 export let server;
 
@@ -27,7 +29,8 @@ before(async () => {
   browser = await launch();
   // 200 random-looking bytes: not a model file.
   const corrupt = Buffer.from(Array.from({ length: 200 }, (_, i) => (i * 73 + 41) % 256));
-  server = await serve(ROOT, { files: { "/test/corrupt.dmbn": corrupt } });
+  virtualFiles["/test/corrupt.dmbn"] = corrupt;
+  server = await serve(ROOT, { files: virtualFiles });
 });
 
 after(async () => {

@@ -29,9 +29,9 @@ struct Args {
     /// Which network (with --resume or --init, the checkpoint's or the file's: may be left out).
     #[arg(long, value_enum, required_unless_present_any = ["resume", "init"])]
     model: Option<ModelKind>,
-    /// Start from this model file's weights and joint normalisation instead of fresh weights
-    /// (train a shipped model longer, or fine-tune it on other data); the network, frame size
-    /// and σ floor are the file's.
+    /// Start from this model file's weights instead of fresh weights (train a shipped model
+    /// longer, or fine-tune it on other data); the network, frame size and σ floor are the
+    /// file's, the joint normalisation is fitted on --data's training ids as for a fresh run.
     #[arg(long, conflicts_with = "resume")]
     init: Option<PathBuf>,
     /// Output folder for metrics, checkpoints and the final model.
@@ -88,6 +88,11 @@ struct Args {
     /// fewer multiply-adds (live mode encodes each new one before it forecasts).
     #[arg(long, value_delimiter = ',', conflicts_with_all = ["resume", "init"])]
     encoder_filters: Option<Vec<usize>>,
+    /// The attentive model: read the joints from each observed frame, and start the joint
+    /// decoder from them where joints are not observed (frames only: the mirror, `dmbn
+    /// imitate`). With --init, a file without the read-out gets one that reads nothing yet.
+    #[arg(long, conflicts_with = "resume")]
+    frame_joints: bool,
     /// Base learning rate (Adam).
     #[arg(long, default_value_t = defaults().lr)]
     lr: f64,
@@ -222,6 +227,11 @@ fn run(args: Args) -> Result<(), TrainError> {
                     .with_encoder_filters(args.encoder_filters.clone())
             })
             .with_joint_weight(args.joint_weight);
+        let model = if args.frame_joints {
+            model.with_frame_joints(Some(true))
+        } else {
+            model
+        };
         let mut config = TrainConfig::new(model, steps, args.seed);
         config.batch = args.batch;
         config.max_contexts = args.max_contexts;

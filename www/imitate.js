@@ -1,0 +1,120 @@
+// Imitate mode, the mirror: the simulated arm performs the joints a model imagined from the
+// demonstration's observed steps (the wasm `enact`), or for comparison the demonstration's own
+// recorded joints (`replay`), with the object where the demonstration had it. The performance's
+// frames are drawn beside the demonstration's, step for step (draw.js), and its outcome —
+// judged in Rust against the demonstration — in a badge.
+
+import { state } from "./state.js";
+import { showError } from "./status.js";
+import { ui } from "./ui.js";
+
+/** What the model saw of the observed steps, by the `#observe` value. */
+const SEEN = { both: "frames and joints", images: "frames only", joints: "joints only" };
+
+/** Counts performances, a hook that automation can wait on (`body.dataset.performances`). */
+let performances = 0;
+
+/**
+ * Whether the arm can perform the episode on screen: a simulator episode, or a folder of
+ * simulator data. The original DMBN data was recorded on a real arm whose joints the simulated
+ * one does not share; its message otherwise.
+ */
+function performable() {
+  if (state.episode?.folder && state.folder?.data === "2020") {
+    return "The robot performs in the simulator, and this sequence is the original DMBN data, recorded on a real arm with other joints: imitate mode needs a simulator episode (the simulator, or a folder `dmbn simulate` wrote).";
+  }
+  return null;
+}
+
+/**
+ * The arm performs the joint means of the finished prediction `p` (a row per step of the
+ * demonstration). Shows why not, instead, when the episode or the model's joints cannot be
+ * performed; the page carries on.
+ */
+export function performImagined(p) {
+  state.imagined = perform("imagined", () => {
+    const rows = p.jointMean.slice(0, p.len * 7);
+    return state.wasm.enact(state.episode.handle, state.episode.action, rows, Uint32Array.from(p.steps));
+  });
+  if (state.imagined) state.imagined.observe = p.observe;
+  show(state.imagined);
+}
+
+/** The demonstration's own joints performed (the ceiling), or back to the imagined performance. */
+export function toggleDemonstration() {
+  if (state.performance?.source === "demonstration" && state.imagined) {
+    show(state.imagined);
+    return;
+  }
+  state.demonstration ??= perform("demonstration", () => state.wasm.replay(state.episode.handle, state.episode.action));
+  show(state.demonstration);
+}
+
+/** The episode, observations or model changed: no performance is current. */
+export function clearPerformances() {
+  state.imagined = state.demonstration = state.performance = null;
+  describe();
+}
+
+/** Runs `enactment` (a wasm call returning an `Imitation`) and keeps what the page draws of it. */
+function perform(source, enactment) {
+  const why = performable();
+  if (why) {
+    showError(why);
+    return null;
+  }
+  const t0 = performance.now();
+  let imitation;
+  try {
+    imitation = enactment();
+  } catch (err) {
+    const whose = source === "imagined" ? "The joints the model imagined" : "The demonstration's joints";
+    showError(new Error(`${whose} could not be performed: ${err.message ?? err}`));
+    return null;
+  }
+  const episode = imitation.performance();
+  const result = {
+    source,
+    len: episode.len,
+    frames: episode.frames(),
+    outcome: imitation.outcome,
+    jointRmse: imitation.jointRmse,
+    observed: imitation.observed(),
+    ms: performance.now() - t0,
+  };
+  episode.free();
+  imitation.free();
+  state.timings.imitation = {
+    source,
+    success: result.outcome.success,
+    summary: result.outcome.summary,
+    joint_rmse: result.jointRmse,
+    ms: result.ms,
+  };
+  document.body.dataset.performances = String(++performances);
+  return result;
+}
+
+/** Makes `performance` (or none) the one drawn. */
+function show(performance) {
+  state.performance = performance;
+  describe();
+}
+
+/** The badge, the button and the note of the imitate panel. */
+function describe() {
+  const p = state.performance;
+  const { body } = document;
+  body.dataset.performed = p?.source ?? "";
+  body.dataset.outcome = p ? (p.outcome.success ? "success" : "missed") : "";
+  ui.outcome.textContent = p ? p.outcome.summary : "no performance yet";
+  ui.outcome.className = `outcome ${p ? (p.outcome.success ? "success" : "missed") : ""}`;
+  ui.replay.textContent =
+    p?.source === "demonstration" && state.imagined ? "perform the imagined joints" : "perform the demonstration's joints";
+  ui.imitateInfo.textContent = !p
+    ? "Predict: the robot sees the chosen steps (frames only by default), imagines its joints at every step and performs them."
+    : p.source === "demonstration"
+      ? `The demonstration's recorded joints, performed (${Math.round(p.ms)} ms).`
+      : `The joints it imagined from ${p.observed.length} observed steps (${SEEN[p.observe]}), performed: ` +
+        `joint RMSE ${p.jointRmse.toFixed(3)} rad against the demonstration's (${Math.round(p.ms)} ms).`;
+}
