@@ -29,6 +29,10 @@ fn shipped_weights_reproduce_the_golden_prediction() {
     assert_eq!(prediction.len(), seq.len());
     let sample = golden::sample(&prediction);
     if std::env::var_os("DMBN_BLESS").is_some() {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "DMBN_BLESS is refused under CI"
+        );
         let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/golden/prediction.json");
         std::fs::write(&path, serde_json::to_string(&sample).unwrap()).unwrap();
         return;

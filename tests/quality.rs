@@ -44,6 +44,10 @@ fn default_model_reproduces_the_golden_scores() {
         })
         .collect();
     if std::env::var_os("DMBN_BLESS").is_some() {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "DMBN_BLESS is refused under CI"
+        );
         let json: Vec<Vec<Option<f64>>> = samples
             .iter()
             .map(|row| row.iter().map(|v| (!v.is_nan()).then_some(*v)).collect())
@@ -263,10 +267,12 @@ fn dmbn_score_prints_tables_and_writes_json() {
             .output()
             .unwrap()
     };
-    let (data_arg, model_arg, json_arg) = (
+    let plot = tmp.path().join("calibration.png");
+    let (data_arg, model_arg, json_arg, plot_arg) = (
         data.to_str().unwrap(),
         model.to_str().unwrap(),
         json.to_str().unwrap(),
+        plot.to_str().unwrap(),
     );
     let out = run(&[
         "--model",
@@ -279,6 +285,8 @@ fn dmbn_score_prints_tables_and_writes_json() {
         "1-1",
         "--json",
         json_arg,
+        "--plot",
+        plot_arg,
     ]);
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(
@@ -308,6 +316,30 @@ fn dmbn_score_prints_tables_and_writes_json() {
         "the baseline holds its observations"
     );
     assert!(rows[0]["quality"]["joint_rmse"].as_f64().unwrap() > 0.0);
+    // The model's calibration (none for a baseline), in the table, the JSON and the plot.
+    assert_eq!(
+        stdout
+            .matches("calibration at the unobserved steps")
+            .count(),
+        2
+    );
+    let calibration = &rows[0]["quality"]["calibration"];
+    for what in ["joints", "pixels", "moving_pixels"] {
+        let c = &calibration[what];
+        let (one, two) = (
+            c["one_sigma"].as_f64().unwrap(),
+            c["two_sigma"].as_f64().unwrap(),
+        );
+        assert!(0.0 < one && one <= two && two <= 1.0, "{what}: {c}");
+        assert_eq!(c["curve"].as_array().unwrap().len(), 10);
+        assert!(c["sigma_to_rmse"].as_f64().unwrap() > 0.0);
+    }
+    assert!(
+        calibration["moving_pixels"]["values"].as_u64() < calibration["pixels"]["values"].as_u64()
+    );
+    assert!(rows[1]["quality"]["calibration"].is_null());
+    let png = image::open(&plot).unwrap();
+    assert_eq!((png.width(), png.height()), (900, 760));
 
     for (args, expected) in [
         (

@@ -404,6 +404,8 @@ fn scores_match_native_within_1e_4() {
             )
             .expect("valid arguments");
         let scores: Scores = serde_wasm_bindgen::from_value(value).expect("{model, baseline}");
+        // The model's σ is judged (the calibration compared in the sample), a baseline has none.
+        assert!(scores.model.calibration.is_some() && scores.baseline.calibration.is_none());
         let got = golden_score::sample(&scores.model, &scores.baseline);
         let (diff, at) = golden_score::max_diff(&got, want);
         assert!(

@@ -69,21 +69,34 @@ pub fn joint_plot(plot: &JointPlot, width: u32, height: u32) -> Result<RgbImage,
             });
         }
     }
+    rendered(width, height, |root| draw(plot, root))
+}
+
+/// Where a figure is drawn: its whole white bitmap.
+pub(crate) type Canvas<'a> = DrawingArea<BitMapBackend<'a>, plotters::coord::Shift>;
+
+/// A `width × height` RGB image that `draw` paints with plotters on a white canvas (the font
+/// registered).
+pub(crate) fn rendered(
+    width: u32,
+    height: u32,
+    draw: impl FnOnce(&Canvas) -> Result<(), Box<dyn std::error::Error>>,
+) -> Result<RgbImage, FigureError> {
     register();
     let mut buffer = vec![255u8; width as usize * height as usize * 3];
-    draw(plot, &mut buffer, width, height).map_err(|e| FigureError::Draw(e.to_string()))?;
+    let painted = || -> Result<(), Box<dyn std::error::Error>> {
+        let root = BitMapBackend::with_buffer(&mut buffer, (width, height)).into_drawing_area();
+        root.fill(&WHITE)?;
+        draw(&root)?;
+        root.present()?;
+        Ok(())
+    };
+    painted().map_err(|e| FigureError::Draw(e.to_string()))?;
     RgbImage::from_raw(width, height, buffer)
         .ok_or_else(|| FigureError::Draw("plot buffer of the wrong size".into()))
 }
 
-fn draw(
-    plot: &JointPlot,
-    buffer: &mut [u8],
-    width: u32,
-    height: u32,
-) -> Result<(), Box<dyn std::error::Error>> {
-    let root = BitMapBackend::with_buffer(buffer, (width, height)).into_drawing_area();
-    root.fill(&WHITE)?;
+fn draw(plot: &JointPlot, root: &Canvas) -> Result<(), Box<dyn std::error::Error>> {
     let band = RGBColor(160, 190, 235);
     let mean_colour = RGBColor(31, 90, 180);
     let x_end = plot.times.iter().copied().fold(1.0f32, f32::max);
@@ -164,7 +177,6 @@ fn draw(
             legend.draw(&Text::new(*label, (70, y - 7), style.clone()))?;
         }
     }
-    root.present()?;
     Ok(())
 }
 

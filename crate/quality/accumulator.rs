@@ -1,5 +1,6 @@
 use serde::{Deserialize, Serialize};
 
+use super::calibration::{Calibration, Coverage, MOVING};
 use super::is_object;
 use crate::data::JOINTS;
 
@@ -27,6 +28,9 @@ pub struct Accumulator {
     object_union: usize,
     observed_object_intersection: usize,
     observed_object_union: usize,
+    joint_coverage: Coverage,
+    pixel_coverage: Coverage,
+    moving_coverage: Coverage,
 }
 
 /// One guess at one step: the mean frame (interleaved RGB in [0, 1]) and joints (dataset
@@ -35,9 +39,21 @@ pub struct Accumulator {
 pub struct Guess<'a> {
     pub frame: &'a [f32],
     pub joints: &'a [f32],
-    /// σ of every pixel channel and every joint, and the joints' standard deviations (NLL is
-    /// per value in normalised joint units, as in training).
-    pub sigma: Option<(&'a [f32], &'a [f32], &'a [f32; JOINTS])>,
+    pub sigma: Option<Sigma<'a>>,
+}
+
+/// A prediction's σ at one step, and what its NLL and calibration are measured against.
+#[derive(Debug, Clone, Copy)]
+pub struct Sigma<'a> {
+    /// σ of every pixel channel.
+    pub frame: &'a [f32],
+    /// σ of every joint (dataset units).
+    pub joints: &'a [f32],
+    /// The joints' standard deviations: NLL and joint coverage are per value in normalised
+    /// joint units, as in training.
+    pub std: &'a [f32; JOINTS],
+    /// The nearest observation's frame (RGB in [0, 1]): pixels that differ from it moved.
+    pub nearest: &'a [f32],
 }
 
 /// The benchmark's measures of one model or baseline over a set of sequences.
@@ -67,6 +83,10 @@ pub struct Quality {
     pub object_iou: Option<f64>,
     /// The same overlap at the observed steps.
     pub observed_object_iou: Option<f64>,
+    /// How well σ describes the error at the scored steps that were not observed (models
+    /// only).
+    #[serde(default)]
+    pub calibration: Option<Calibration>,
 }
 
 impl Accumulator {
@@ -112,7 +132,11 @@ impl Accumulator {
         self.image_values += frame.len();
         self.object_intersection += intersection;
         self.object_union += union;
-        if let Some((image_sigma, joint_sigma, std)) = guess.sigma {
+        if let Some(sigma) = guess.sigma {
+            if !observed {
+                self.cover(guess, sigma, frame, joints);
+            }
+            let (image_sigma, joint_sigma, std) = (sigma.frame, sigma.joints, sigma.std);
             self.nll_steps += 1;
             self.image_nll += frame
                 .iter()
@@ -135,6 +159,33 @@ impl Accumulator {
         }
     }
 
+    /// Counts how often the truth lies within the guess's σ bands.
+    fn cover(&mut self, guess: Guess, sigma: Sigma, frame: &[u8], joints: &[f32; JOINTS]) {
+        for (j, truth) in joints.iter().enumerate() {
+            let std = sigma.std[j] as f64;
+            let error = (truth - guess.joints[j]) as f64 / std;
+            self.joint_coverage.add(error, sigma.joints[j] as f64 / std);
+        }
+        for ((truth, mean), (s, near)) in
+            frame.chunks_exact(3).zip(guess.frame.chunks_exact(3)).zip(
+                sigma
+                    .frame
+                    .chunks_exact(3)
+                    .zip(sigma.nearest.chunks_exact(3)),
+            )
+        {
+            let truth: [f32; 3] = std::array::from_fn(|c| truth[c] as f32 / 255.0);
+            let moved = (0..3).any(|c| (truth[c] - near[c]).abs() > MOVING);
+            for c in 0..3 {
+                let (error, sigma) = ((truth[c] - mean[c]) as f64, s[c] as f64);
+                self.pixel_coverage.add(error, sigma);
+                if moved {
+                    self.moving_coverage.add(error, sigma);
+                }
+            }
+        }
+    }
+
     /// Adds another accumulator's sums (another set of sequences).
     pub fn merge(&mut self, other: &Accumulator) {
         self.sequences += other.sequences;
@@ -154,6 +205,9 @@ impl Accumulator {
         self.object_union += other.object_union;
         self.observed_object_intersection += other.observed_object_intersection;
         self.observed_object_union += other.observed_object_union;
+        self.joint_coverage.merge(&other.joint_coverage);
+        self.pixel_coverage.merge(&other.pixel_coverage);
+        self.moving_coverage.merge(&other.moving_coverage);
     }
 
     /// The measures; NaN where nothing was counted.
@@ -175,6 +229,11 @@ impl Accumulator {
                 self.observed_object_intersection,
                 self.observed_object_union,
             ),
+            calibration: (self.nll_steps > 0).then(|| Calibration {
+                joints: self.joint_coverage.finish(),
+                pixels: self.pixel_coverage.finish(),
+                moving_pixels: self.moving_coverage.finish(),
+            }),
         }
     }
 }
@@ -233,6 +292,98 @@ mod tests {
         assert_eq!(q.image_nll, None);
     }
 
+    /// A prediction whose errors are Gaussian with its own σ covers ±1σ and ±2σ as a
+    /// Gaussian does, for joints (whatever their scale) and pixels; pixels that did not move
+    /// since the nearest observation are left out of the moving ones; observed steps count
+    /// for nothing.
+    #[test]
+    fn errors_of_the_predicted_sigma_cover_as_a_gaussian() {
+        // Standard normal quantiles at 400 equal-probability midpoints: bisection on Φ,
+        // integrated by Simpson's rule.
+        let quantile = |p: f64| {
+            let (mut lo, mut hi) = (-8.0f64, 8.0f64);
+            for _ in 0..80 {
+                let mid = 0.5 * (lo + hi);
+                let n = 200;
+                let h = mid / n as f64;
+                let f = |x: f64| (-x * x / 2.0).exp() / (2.0 * std::f64::consts::PI).sqrt();
+                let integral: f64 = (0..n)
+                    .map(|i| {
+                        let a = i as f64 * h;
+                        h / 6.0 * (f(a) + 4.0 * f(a + h / 2.0) + f(a + h))
+                    })
+                    .sum();
+                if 0.5 + integral < p {
+                    lo = mid
+                } else {
+                    hi = mid
+                }
+            }
+            0.5 * (lo + hi)
+        };
+        let steps = 400;
+        let z: Vec<f32> = (0..steps)
+            .map(|i| quantile((i as f64 + 0.5) / steps as f64) as f32)
+            .collect();
+        let std = [0.5, 1.0, 2.0, 0.1, 3.0, 1.0, 0.02];
+        let joint_sigma: [f32; JOINTS] = std::array::from_fn(|j| 0.3 * std[j]);
+        let mut acc = Accumulator::default();
+        acc.begin_sequence();
+        // Two pixels: the first moved since the nearest observation (black), the second not.
+        let truth_frame = [200u8, 100, 50, 10, 20, 30];
+        let nearest = [0.0, 0.0, 0.0, 10.0 / 255.0, 20.0 / 255.0, 30.0 / 255.0];
+        let pixel_sigma = [0.05f32; 6];
+        for (k, &zk) in z.iter().enumerate() {
+            let joints: [f32; JOINTS] = std::array::from_fn(|j| j as f32 - zk * joint_sigma[j]);
+            // Every pixel channel errs by the same z; the second pixel doubly (σ says 0.05).
+            let frame: Vec<f32> = truth_frame
+                .iter()
+                .enumerate()
+                .map(|(i, &v)| {
+                    v as f32 / 255.0 - zk * pixel_sigma[i] * if i < 3 { 1.0 } else { 2.0 }
+                })
+                .collect();
+            let guess = Guess {
+                frame: &frame,
+                joints: &joints,
+                sigma: Some(Sigma {
+                    frame: &pixel_sigma,
+                    joints: &joint_sigma,
+                    std: &std,
+                    nearest: &nearest,
+                }),
+            };
+            let truth: [f32; JOINTS] = std::array::from_fn(|j| j as f32);
+            acc.add(guess, &truth_frame, &truth, false, true);
+            // An observed step with a wild guess: not counted.
+            if k % 10 == 0 {
+                let wild = Guess {
+                    joints: &[100.0; JOINTS],
+                    ..guess
+                };
+                acc.add(wild, &truth_frame, &truth, true, true);
+            }
+        }
+        let c = acc.finish().calibration.unwrap();
+        let (joints, pixels, moving) = (
+            c.joints.unwrap(),
+            c.pixels.unwrap(),
+            c.moving_pixels.unwrap(),
+        );
+        assert_eq!(joints.values, (steps * JOINTS) as u64);
+        assert!((joints.one_sigma - 0.6827).abs() < 0.005, "{joints:?}");
+        assert!((joints.two_sigma - 0.9545).abs() < 0.005, "{joints:?}");
+        assert!((joints.sigma_to_rmse - 1.0).abs() < 0.01, "{joints:?}");
+        // The moving pixel is calibrated; the still one errs twice its σ.
+        assert_eq!(moving.values, (steps * 3) as u64);
+        assert!((moving.two_sigma - 0.9545).abs() < 0.005, "{moving:?}");
+        assert_eq!(pixels.values, (steps * 6) as u64);
+        assert!(
+            (pixels.two_sigma - (0.9545 + 0.6827) / 2.0).abs() < 0.005,
+            "{pixels:?}"
+        );
+    }
+
     #[test]
     fn a_missing_object_scores_zero_overlap() {
         let mut acc = Accumulator::default();
@@ -240,7 +391,12 @@ mod tests {
         let guess = Guess {
             frame: &grey,
             joints: &[0.0; JOINTS],
-            sigma: Some((&[0.1; 3], &[1.0; JOINTS], &[2.0; JOINTS])),
+            sigma: Some(Sigma {
+                frame: &[0.1; 3],
+                joints: &[1.0; JOINTS],
+                std: &[2.0; JOINTS],
+                nearest: &grey,
+            }),
         };
         acc.add(guess, &[250, 220, 5], &[0.0; JOINTS], false, true);
         let q = acc.finish();

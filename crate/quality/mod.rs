@@ -4,6 +4,7 @@
 //! observation), and optionally each action's mean motion. One implementation natively
 //! (`dmbn score`) and in wasm (`Model.score`).
 mod accumulator;
+mod calibration;
 mod forecast;
 mod mean_motion;
 mod object_mask;
@@ -11,6 +12,7 @@ mod report;
 mod scenario;
 
 pub use accumulator::{Accumulator, Quality};
+pub use calibration::{Calibration, Coverage, CoverageSummary, LEVELS, MOVING};
 pub use forecast::score_steps;
 pub use mean_motion::MeanMotion;
 pub use object_mask::{is_object, OBJECT_COLOUR};

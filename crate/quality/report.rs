@@ -1,7 +1,7 @@
 use serde::Serialize;
 
-use super::accumulator::Guess;
-use super::{Accumulator, MeanMotion, Quality, Scenario};
+use super::accumulator::{Guess, Sigma};
+use super::{Accumulator, CoverageSummary, MeanMotion, Quality, Scenario};
 use crate::data::{Sequence, JOINTS};
 use crate::model::{linear_weights, ModelError};
 use crate::predict::{Observations, Predictor};
@@ -59,19 +59,20 @@ pub fn score_sequence(
             continue;
         }
         let (frame, joints) = (seq.frame(k), &seq.joints[k]);
+        let (nearest, baseline_joints) = baseline(seq, &steps.observed, k);
         let model = Guess {
             frame: &prediction.image_mean[k * n..(k + 1) * n],
             joints: &prediction.joint_mean[k * JOINTS..(k + 1) * JOINTS],
-            sigma: Some((
-                prediction.sigma_frame(k),
-                &prediction.joint_sigma[k * JOINTS..(k + 1) * JOINTS],
-                &std,
-            )),
+            sigma: Some(Sigma {
+                frame: prediction.sigma_frame(k),
+                joints: &prediction.joint_sigma[k * JOINTS..(k + 1) * JOINTS],
+                std: &std,
+                nearest: &observed_frames[nearest],
+            }),
         };
         scores
             .model
             .add(model, frame, joints, is_observed, is_scored);
-        let (nearest, baseline_joints) = baseline(seq, &steps.observed, k);
         let baseline = Guess {
             frame: &observed_frames[nearest],
             joints: &baseline_joints,
@@ -119,6 +120,9 @@ fn baseline(seq: &Sequence, observed: &[usize], k: usize) -> (usize, [f32; JOINT
     });
     (nearest, joints)
 }
+
+/// One number of a coverage summary, for the calibration table.
+type Measure = fn(&CoverageSummary) -> f64;
 
 /// One row of the benchmark's table.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -173,6 +177,43 @@ impl QualityReport {
                 opt(q.observed_object_iou, 3),
                 opt(q.image_nll, 3),
                 opt(q.joint_nll, 3),
+            ));
+        }
+        let calibrated: Vec<_> = self
+            .rows
+            .iter()
+            .filter_map(|row| Some((&row.name, row.quality.calibration?)))
+            .collect();
+        if calibrated.is_empty() {
+            return out;
+        }
+        out.push_str(
+            "\ncalibration at the unobserved steps (a calibrated Gaussian: ±1σ 68.3%, ±2σ 95.4%, σ / RMSE 1)\n\n| | joints ±1σ | joints ±2σ | joints σ / RMSE | pixels ±1σ | pixels ±2σ | pixels σ / RMSE | moving pixels ±2σ | moving pixels σ / RMSE |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+        );
+        let cell =
+            |c: Option<CoverageSummary>, what: fn(&CoverageSummary) -> f64, percent: bool| {
+                c.map_or("—".to_string(), |c| {
+                    if percent {
+                        format!("{:.1}%", 100.0 * what(&c))
+                    } else {
+                        format!("{:.2}", what(&c))
+                    }
+                })
+            };
+        let one: Measure = |c| c.one_sigma;
+        let two: Measure = |c| c.two_sigma;
+        let ratio: Measure = |c| c.sigma_to_rmse;
+        for (name, c) in calibrated {
+            out.push_str(&format!(
+                "| {name} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
+                cell(c.joints, one, true),
+                cell(c.joints, two, true),
+                cell(c.joints, ratio, false),
+                cell(c.pixels, one, true),
+                cell(c.pixels, two, true),
+                cell(c.pixels, ratio, false),
+                cell(c.moving_pixels, two, true),
+                cell(c.moving_pixels, ratio, false),
             ));
         }
         out

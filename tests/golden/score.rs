@@ -3,7 +3,7 @@
 //! `DMBN_BLESS=1`) and checks itself against it; wasm (`Model.score`) must agree within 1e-4.
 #![allow(dead_code)]
 
-use dmbn::quality::{Quality, Scenario};
+use dmbn::quality::{CoverageSummary, Quality, Scenario};
 
 /// The model scored: the page's default.
 pub const MODEL: &[u8] = include_bytes!("../../assets/models/attn-sim.dmbn");
@@ -20,6 +20,22 @@ pub const SCENARIOS: [Scenario; 2] = [Scenario::Interp, Scenario::Extrap];
 
 /// Every measure of the model and of the baseline, NaN for an absent one.
 pub fn sample(model: &Quality, baseline: &Quality) -> Vec<f64> {
+    // The model's calibration last, by continuous measures (a coverage fraction of a few
+    // hundred joint values could flip a count between builds that agree within 1e-4).
+    let calibration = model.calibration.map_or([f64::NAN; 4], |c| {
+        let of = |s: Option<CoverageSummary>, two: bool| {
+            s.map_or(
+                f64::NAN,
+                |s| if two { s.two_sigma } else { s.sigma_to_rmse },
+            )
+        };
+        [
+            of(c.joints, false),
+            of(c.pixels, false),
+            of(c.pixels, true),
+            of(c.moving_pixels, false),
+        ]
+    });
     [model, baseline]
         .iter()
         .flat_map(|q| {
@@ -35,6 +51,7 @@ pub fn sample(model: &Quality, baseline: &Quality) -> Vec<f64> {
                 q.observed_object_iou.unwrap_or(f64::NAN),
             ]
         })
+        .chain(calibration)
         .collect()
 }
 

@@ -6,6 +6,7 @@ use std::path::PathBuf;
 use clap::{Args, ValueEnum};
 
 use dmbn::data::{Dataset, Sequence};
+use dmbn::figure::{calibration_plot, save_png};
 use dmbn::predict::Predictor;
 use dmbn::quality::{score_sequence, Accumulator, MeanMotion, QualityReport, QualityRow, Scenario};
 
@@ -51,6 +52,11 @@ pub struct ScoreArgs {
     /// Write the reports as JSON here (a list, one per scenario).
     #[arg(long)]
     json: Option<PathBuf>,
+    /// Draw the models' calibration curves here (PNG): per scenario, for the joints and the
+    /// moving pixels, the fraction of true values inside each central interval of the
+    /// predicted Gaussian against the fraction it claims.
+    #[arg(long)]
+    plot: Option<PathBuf>,
 }
 
 pub fn run(args: ScoreArgs) -> Result<(), CliError> {
@@ -176,6 +182,11 @@ pub fn run(args: ScoreArgs) -> Result<(), CliError> {
     }
     if let Some(path) = &args.json {
         write_json(path, &reports)?;
+        println!("wrote {}", path.display());
+    }
+    if let Some(path) = &args.plot {
+        let height = 380 * reports.len() as u32;
+        save_png(path, &calibration_plot(&reports, 900, height)?)?;
         println!("wrote {}", path.display());
     }
     Ok(())
