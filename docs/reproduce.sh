@@ -75,7 +75,8 @@ if [ "${TRAIN:-0}" = 1 ]; then
         # Joints read from frames, frames alone in 90% of the sequences.
         single_modality=0.9 stage attn-4 --lr 5e-4 --beta-nll 1 --init "$out/runs/attn-3/model.dmbn" --frame-joints --steps 2000 --seed 5
         single_modality=0.9 stage attn-5 --lr 3e-4 --beta-nll 1 --init "$out/runs/attn-4/best.dmbn" --steps 4000 --seed 6
-        file[$m]=$out/runs/attn-5/model.dmbn ;;
+        single_modality=0.9 stage attn-6 --lr 2e-4 --beta-nll 1 --init "$out/runs/attn-5/model.dmbn" --steps 4000 --seed 8
+        file[$m]=$out/runs/attn-6/model.dmbn ;;
       sim/pte) stage pte "${first[@]}" --model pte --beta-nll 1
         stage pte-2 "${longer[@]}" --init "$out/runs/pte/model.dmbn" --steps 3000 --seed 2
         file[$m]=$out/runs/pte-2/model.dmbn ;;

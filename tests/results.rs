@@ -13,11 +13,12 @@ use dmbn::predict::{Observations, Predictor};
 use dmbn::sim::{episode, Action};
 
 /// Every shipped model file and what it must hold.
-const SHIPPED: [(&str, ModelKind); 7] = [
+const SHIPPED: [(&str, ModelKind); 8] = [
     ("attn-sim", ModelKind::Attn),
     ("dmbn-sim", ModelKind::Dmbn),
     ("pte-sim", ModelKind::Pte),
     ("pte-aug-sim", ModelKind::Pte),
+    ("attn-2020", ModelKind::Attn),
     ("dmbn-2020", ModelKind::Dmbn),
     ("pte-2020", ModelKind::Pte),
     ("pte-aug-2020", ModelKind::Pte),

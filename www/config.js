@@ -22,6 +22,7 @@ export const MODELS = {
   dmbn: { name: "DMBN", kind: "dmbn", file: "dmbn-sim.dmbn", data: "sim" },
   pte: { name: "DMBN-PTE", kind: "pte", file: "pte-sim.dmbn", data: "sim" },
   "pte-aug": { name: "DMBN-PTE + time warps", kind: "pte", file: "pte-aug-sim.dmbn", data: "sim" },
+  "attn-2020": { name: "Attentive · original data", kind: "attn", file: "attn-2020.dmbn", data: "2020" },
   "pte-2020": { name: "DMBN-PTE · original data", kind: "pte", file: "pte-2020.dmbn", data: "2020" },
   "dmbn-2020": { name: "DMBN · original data", kind: "dmbn", file: "dmbn-2020.dmbn", data: "2020" },
   "pte-aug-2020": { name: "DMBN-PTE + time warps · original data", kind: "pte", file: "pte-aug-2020.dmbn", data: "2020" },

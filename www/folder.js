@@ -8,7 +8,7 @@ import { generate, setEpisode } from "./episodes.js";
 import { loadModel, offerModels } from "./models.js";
 import { invalidate } from "./prediction.js";
 import { state } from "./state.js";
-import { showError } from "./status.js";
+import { setState, showError } from "./status.js";
 import { ui } from "./ui.js";
 
 /** Counts sequence reads, so that only the latest one shows. */
@@ -62,7 +62,13 @@ export async function readSequence(id, action) {
   ui.sequence.value = `${id}/${action}`;
   const episode = setEpisode(ep, { action, seed: id, placed: false, ms, folder: { root: folder.handle.root, id } });
   ui.objectInfo.textContent = `${folder.handle.root}/${id}/${action}: ${episode.len} steps read in ${Math.round(ms)} ms (frames at ${IMAGE_SIZE}×${IMAGE_SIZE})`;
-  folder.data ??= await fittingData(episode);
+  if (!folder.data) {
+    // Not ready until the models that fit the folder are offered: a quick click must not
+    // predict its sequence with the other data's models.
+    setState("loading");
+    ui.status.textContent = "Matching the folder's joints to the models…";
+    folder.data = await fittingData(episode);
+  }
   if (state.episode !== episode) return false;
   if (offerModels(folder.data)) ui.model.dispatchEvent(new Event("change"));
   else invalidate();

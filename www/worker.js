@@ -105,6 +105,7 @@ const NAMES = {
   dmbn: "DMBN",
   pte: "DMBN-PTE",
   "pte-aug": "DMBN-PTE + time warps",
+  "attn-2020": "Attentive · original data",
   "pte-2020": "DMBN-PTE · original data",
   "dmbn-2020": "DMBN · original data",
   "pte-aug-2020": "DMBN-PTE + time warps · original data",

@@ -124,12 +124,12 @@ describe("open a dataset", () => {
     await openFolder(page, original);
     assert.equal(await page.locator("#error").isHidden(), true, await errorText(page));
     assert.equal(await page.locator("#sequence option").count(), 81);
-    // The page compares the joints with both models' normalisations, then offers the -2020 ones.
-    await page.waitForFunction(() => document.getElementById("model").value === "pte-2020");
+    // The page compares the joints with both models' normalisations, then offers the -2020
+    // ones, the attentive first: before it says it is ready (a click then predicts with them).
     await waitState(page, "ready");
     const models = await page.evaluate(() => [...document.getElementById("model").options].map((o) => o.value));
-    assert.deepEqual(models, ["pte-2020", "dmbn-2020", "pte-aug-2020"]);
-    assert.equal(await page.inputValue("#model"), "pte-2020");
+    assert.deepEqual(models, ["attn-2020", "pte-2020", "dmbn-2020", "pte-aug-2020"]);
+    assert.equal(await page.inputValue("#model"), "attn-2020");
     await page.selectOption("#sequence", "12/move");
     await page.waitForFunction(() => /\/12\/move:/.test(document.getElementById("object-info").textContent));
     await pause(page);
