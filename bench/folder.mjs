@@ -1,7 +1,7 @@
 #!/usr/bin/env node
 // The README's screenshot of the page on the original data: opens $DMBN2020 (the original
 // DMBN dataset, never part of the repository) with the page's "Open a dataset", predicts
-// sequence 12 (move) with the model the page chooses for it (pte-2020) from 5 observed steps,
+// sequence 12 (move) with the model the page chooses for it (attn-2020) from 5 observed steps,
 // half-way through, and saves docs/folder.png.
 //
 // Usage: DMBN2020=path/to/data2020 node bench/folder.mjs
@@ -29,7 +29,7 @@ try {
   await page.goto(`${server.url}www/?chunkDelay=150`);
   await page.waitForFunction(() => document.body.dataset.state === "ready");
   await page.setInputFiles("#dataset", data);
-  await page.waitForFunction(() => document.getElementById("model").value === "pte-2020" && document.body.dataset.state === "ready");
+  await page.waitForFunction(() => document.getElementById("model").value === "attn-2020" && document.body.dataset.state === "ready");
   await page.selectOption("#sequence", "12/move");
   await page.waitForFunction(() => /\/12\/move:/.test(document.getElementById("object-info").textContent));
   if ((await page.getAttribute("#play", "aria-pressed")) === "true") await page.click("#play");

@@ -94,8 +94,16 @@ if [ "${TRAIN:-0}" = 1 ]; then
         file[$m]=$out/runs/dmbn/model.dmbn ;;
       2020/pte-aug) stage pte-aug "${first[@]}" --model pte --augment --beta-nll 1
         file[$m]=$out/runs/pte-aug/model.dmbn ;;
-      2020/attn) stage attn "${first[@]}" --model attn --beta-nll 1
-        file[$m]=$out/runs/attn/best.dmbn ;;
+      # The simulator's attentive model (stage attn-3 of the sim reproduction) fine-tuned here.
+      2020/attn) sim_attn=$root/out/results-sim/runs/attn-3/model.dmbn
+        if [ ! -f "$sim_attn" ]; then
+          echo "error: attn-2020 starts from $sim_attn: run TRAIN=1 bash docs/reproduce.sh sim first" >&2
+          exit 2
+        fi
+        single_modality=0.5 stage attn --init "$sim_attn" --steps 1500 --lr 5e-4 --seed 1 --beta-nll 1
+        single_modality=0.5 stage attn-2 --init "$out/runs/attn/best.dmbn" --steps 3000 --lr 3e-4 --seed 2 --beta-nll 1
+        single_modality=0.5 stage attn-3 --init "$out/runs/attn-2/best.dmbn" --steps 3000 --lr 2e-4 --seed 3 --beta-nll 1
+        file[$m]=$out/runs/attn-3/model.dmbn ;;
     esac
   done
 fi
