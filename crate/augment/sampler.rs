@@ -135,22 +135,6 @@ impl Sampler {
         }
         (batch, joint_targets)
     }
-
-    /// The inference batch for one sequence: observe `contexts` (step indices) with blend `c`,
-    /// predict `targets`. Targets may repeat contexts (reconstruction).
-    pub fn prediction(
-        seq: &Sequence,
-        contexts: &[usize],
-        targets: &[usize],
-        blend: f32,
-        norm: &Normalization,
-    ) -> Batch {
-        let mut batch =
-            Batch::with_targets(1, contexts.len(), targets.len(), seq.image_size as usize);
-        fill(&mut batch, 0, seq, contexts, targets, norm);
-        batch.blend[0] = blend;
-        batch
-    }
 }
 
 /// `n` context steps within a prefix of 10-90% of a `t`-step sequence, then up to `targets`
@@ -384,10 +368,25 @@ mod tests {
         }
     }
 
+    /// One sequence's batch: observe `contexts` with blend `blend`, predict `targets`.
+    fn prediction(
+        seq: &Sequence,
+        contexts: &[usize],
+        targets: &[usize],
+        blend: f32,
+        norm: &Normalization,
+    ) -> Batch {
+        let mut batch =
+            Batch::with_targets(1, contexts.len(), targets.len(), seq.image_size as usize);
+        fill(&mut batch, 0, seq, contexts, targets, norm);
+        batch.blend[0] = blend;
+        batch
+    }
+
     #[test]
     fn frames_are_channels_first_in_unit_range() {
         let s = seq(3);
-        let batch = Sampler::prediction(&s, &[1], &[0, 2], 0.5, &Normalization::identity());
+        let batch = prediction(&s, &[1], &[0, 2], 0.5, &Normalization::identity());
         // Pixel 0 of frame 1 is bytes 12, 13, 14.
         assert_eq!(batch.context_images[0], 12.0 / 255.0);
         assert_eq!(batch.context_images[4], 13.0 / 255.0);
@@ -399,7 +398,7 @@ mod tests {
     #[test]
     fn the_prediction_batch_holds_the_asked_steps() {
         let pool = vec![tagged(0, 5), tagged(1, 9)];
-        let batch = Sampler::prediction(&pool[1], &[7, 2], &[2, 0, 8], 0.25, &norm());
+        let batch = prediction(&pool[1], &[7, 2], &[2, 0, 8], 0.25, &norm());
         assert_eq!(decode(&pool, &batch), vec![(1, vec![7, 2], vec![2, 0, 8])]);
         assert_eq!(batch.blend, vec![0.25]);
     }

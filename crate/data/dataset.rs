@@ -87,11 +87,6 @@ impl Dataset {
         actions
     }
 
-    /// The sequences of one action, by id.
-    pub fn of_action<'a>(&'a self, action: &'a str) -> impl Iterator<Item = &'a SequenceRef> + 'a {
-        self.sequences.iter().filter(move |s| s.action == action)
-    }
-
     /// The sequence `id`/`action`, or an error listing what the dataset holds.
     pub fn find(&self, id: u32, action: &str) -> Result<&SequenceRef, DataError> {
         self.sequences

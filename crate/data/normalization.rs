@@ -1,7 +1,5 @@
 use serde::{Deserialize, Serialize};
 
-use super::Sequence;
-
 /// Joint normalisation statistics of a dataset: the model sees `(joint - mean) / std` per
 /// column and predicts in that space. Saved in the model file, so predictions can be mapped
 /// back to radians (and gripper units) with the statistics the model was trained on.
@@ -58,11 +56,6 @@ impl Normalization {
             out.std[j] = if std < Self::MIN_STD { 1.0 } else { std };
         }
         out
-    }
-
-    /// [`Normalization::fit`] over every step of `sequences`.
-    pub fn from_sequences<'a>(sequences: impl IntoIterator<Item = &'a Sequence>) -> Self {
-        Self::fit(sequences.into_iter().flat_map(|s| s.joints.iter()))
     }
 
     /// `(joints - mean) / std`, column by column.
