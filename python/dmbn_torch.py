@@ -477,6 +477,8 @@ class Predictor(nn.Module):
             raise ValueError(f"frames: expected [N, {s}, {s}, 3] uint8, found {list(frames.shape)}")
         mean = torch.tensor(self.normalization["mean"])
         std = torch.tensor(self.normalization["std"])
+        # A calibrated file's factor on every joint σ (`dmbn calibrate`; absent: 1).
+        sigma_scale = float(self.header.get("joint_sigma_scale") or 1.0)
         joints = (torch.as_tensor(joints, dtype=torch.float32) - mean) / std
         n = joints.shape[0]
         contexts = Contexts(
@@ -494,7 +496,7 @@ class Predictor(nn.Module):
             "image_mean": out["image_mean"].permute(0, 2, 3, 1),
             "image_sigma": out["image_sigma"].permute(0, 2, 3, 1),
             "joint_mean": out["joint_mean"] * std + mean,
-            "joint_sigma": out["joint_sigma"] * std,
+            "joint_sigma": out["joint_sigma"] * std * sigma_scale,
         }
 
 

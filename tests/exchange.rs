@@ -12,7 +12,10 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use burn::tensor::Device;
-use dmbn::model::{export_safetensors, import_safetensors, load_bytes, read_header, ModelError};
+use dmbn::model::{
+    export_safetensors, import_safetensors, load_bytes, read_header, with_joint_sigma_scale,
+    ModelError,
+};
 use dmbn::predict::{Observations, Predictor};
 use dmbn::sim::Action;
 use safetensors::tensor::TensorView;
@@ -62,6 +65,17 @@ fn export_then_import_predicts_exactly_as_the_shipped_model() {
             assert_eq!(got, want, "{} blend {blend}", path.display());
         }
     }
+}
+
+/// A calibrated file's joint σ scale goes to PyTorch in the metadata and comes back.
+#[test]
+fn the_joint_sigma_scale_survives_export_and_import() {
+    let bytes = std::fs::read(support::asset("models/dmbn-sim.dmbn")).unwrap();
+    let scaled = with_joint_sigma_scale(&bytes, 1.3).unwrap();
+    let back = import_safetensors(&export_safetensors(&scaled, false).unwrap(), false).unwrap();
+    assert_eq!(read_header(&back).unwrap().joint_sigma_scale, Some(1.3));
+    let plain = import_safetensors(&export_safetensors(&bytes, false).unwrap(), false).unwrap();
+    assert_eq!(read_header(&plain).unwrap().joint_sigma_scale, None);
 }
 
 #[test]
@@ -343,7 +357,12 @@ fn the_pytorch_twin_predicts_what_dmbn_predict_does() {
             String::from_utf8_lossy(&out.stderr)
         );
     };
-    for model in shipped() {
+    // Every shipped file, and one with a joint σ scale (`dmbn calibrate`), which the twin
+    // must apply as the Rust predictor does.
+    let calibrated = dir.path().join("dmbn-sim-calibrated.dmbn");
+    let bytes = std::fs::read(support::asset("models/dmbn-sim.dmbn")).unwrap();
+    std::fs::write(&calibrated, with_joint_sigma_scale(&bytes, 1.3).unwrap()).unwrap();
+    for model in shipped().into_iter().chain([calibrated]) {
         let name = model.file_stem().unwrap().to_string_lossy().into_owned();
         let st = dir.path().join(format!("{name}.safetensors"));
         dmbn(&[

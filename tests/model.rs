@@ -10,8 +10,9 @@ use burn::tensor::{Device, Tensor, TensorData};
 use dmbn::augment::Batch;
 use dmbn::data::write_atomic;
 use dmbn::model::{
-    file, load_bytes, load_bytes_expecting, read_header, save_bytes, tensors, BatchTensors, Model,
-    ModelConfig, ModelError, ModelKind, Normalization, Prediction, Representation,
+    file, load_bytes, load_bytes_expecting, read_header, save_bytes, tensors,
+    with_joint_sigma_scale, BatchTensors, Model, ModelConfig, ModelError, ModelKind, Normalization,
+    Prediction, Representation,
 };
 
 /// A small deterministic pseudo-random generator (values in [0, 1)).
@@ -500,6 +501,52 @@ fn frame_joints_start_frames_only_predictions_from_the_joints_read() {
         .err()
         .unwrap();
     assert!(err.to_string().contains("frame_joints"), "{err}");
+}
+
+/// A joint σ scale is written into the header, leaves the weights and every other output as
+/// they are, multiplies the predicted joint σ exactly, and must be a finite number above 0.
+#[test]
+fn a_joint_sigma_scale_multiplies_the_joint_sigma() {
+    let device = device();
+    let model = model(ModelKind::Pte, 64, &device);
+    let norm = Normalization {
+        mean: [0.1; 7],
+        std: [0.5; 7],
+    };
+    let bytes = save_bytes(&model, &norm, false).unwrap();
+    let scaled = with_joint_sigma_scale(&bytes, 1.75).unwrap();
+    assert_eq!(read_header(&bytes).unwrap().joint_sigma_scale, None);
+    assert_eq!(read_header(&scaled).unwrap().joint_sigma_scale, Some(1.75));
+    let seq = dmbn::sim::episode(dmbn::sim::Action::Grasp, 3, 64).unwrap();
+    let observations = dmbn::predict::Observations::from_sequence(&seq, &[0, 20]).unwrap();
+    let predict = |bytes: &[u8]| {
+        dmbn::predict::Predictor::from_bytes(bytes)
+            .unwrap()
+            .predict(&observations, &seq.times()[..5], 0.5)
+            .unwrap()
+    };
+    let (plain, wide) = (predict(&bytes), predict(&scaled));
+    assert_eq!(plain.joint_mean, wide.joint_mean);
+    assert_eq!(plain.image_mean, wide.image_mean);
+    assert_eq!(plain.image_sigma, wide.image_sigma);
+    for (a, b) in plain.joint_sigma.iter().zip(&wide.joint_sigma) {
+        assert!((b - 1.75 * a).abs() <= 1e-6 * b.abs(), "{a} {b}");
+    }
+    // Setting it again replaces it.
+    let again = with_joint_sigma_scale(&scaled, 0.5).unwrap();
+    assert_eq!(read_header(&again).unwrap().joint_sigma_scale, Some(0.5));
+    for bad in [0.0, -1.0, f32::NAN, f32::INFINITY] {
+        let err = with_joint_sigma_scale(&bytes, bad).err().unwrap();
+        assert!(
+            err.to_string().contains("joint_sigma_scale"),
+            "{bad}: {err}"
+        );
+    }
+    // A file whose header says so is refused, naming the field.
+    let (mut header, weights) = parts(&scaled);
+    header["joint_sigma_scale"] = serde_json::json!(-2.0);
+    let err = load_err(&assemble(&header, &weights));
+    assert!(err.to_string().contains("joint_sigma_scale"), "{err}");
 }
 
 /// Rebuilds a file from a header and a weight section (the checksum and length follow the

@@ -379,3 +379,71 @@ fn dmbn_score_prints_tables_and_writes_json() {
         assert!(!stderr.contains("panicked"), "{args:?}: {stderr}");
     }
 }
+
+/// `dmbn calibrate` writes the model with a joint σ scale under which ±2σ holds 95% of the
+/// joints of the sequences it was fitted on (both scenarios pooled), and names what is wrong.
+#[test]
+fn dmbn_calibrate_scales_the_joint_sigma_to_cover_95_percent() {
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("data");
+    support::simulated_dataset(&data, 0..3, &Action::ALL, 410_000);
+    let model = support::asset("models/attn-sim.dmbn");
+    let out = tmp.path().join("calibrated.dmbn");
+    let run = |args: Vec<std::ffi::OsString>| {
+        Command::new(env!("CARGO_BIN_EXE_dmbn"))
+            .arg("calibrate")
+            .args(args)
+            .output()
+            .unwrap()
+    };
+    let args = |ids: &str, model: &Path| -> Vec<std::ffi::OsString> {
+        [
+            "--model".as_ref(),
+            model.as_os_str(),
+            "--data".as_ref(),
+            data.as_os_str(),
+            "--ids".as_ref(),
+            ids.as_ref(),
+            "--out".as_ref(),
+            out.as_os_str(),
+        ]
+        .iter()
+        .map(|a| a.to_os_string())
+        .collect()
+    };
+    let ok = run(args("0-2", &model));
+    assert!(
+        ok.status.success(),
+        "{}",
+        String::from_utf8_lossy(&ok.stderr)
+    );
+    assert!(String::from_utf8_lossy(&ok.stdout).contains("now 95.5%"));
+    let bytes = std::fs::read(&out).unwrap();
+    let scale = dmbn::model::read_header(&bytes)
+        .unwrap()
+        .joint_sigma_scale
+        .unwrap();
+    assert!(scale > 0.0 && scale != 1.0, "{scale}");
+    let calibrated = Predictor::from_bytes(&bytes).unwrap();
+    let dataset = dmbn::data::Dataset::open(&data).unwrap();
+    let mut z = Vec::new();
+    for r in dataset.sequences() {
+        let seq = dataset.read(r, Some(64)).unwrap();
+        for scenario in Scenario::ALL {
+            z.extend(dmbn::quality::joint_z_scores(&calibrated, &seq, scenario, 5, 0.5).unwrap());
+        }
+    }
+    let covered = z.iter().filter(|&&v| v <= 2.0).count() as f64 / z.len() as f64;
+    assert!(
+        (covered - 0.9545).abs() < 0.005,
+        "{covered} of {} values",
+        z.len()
+    );
+    // Ids with no sequence, and a file that is not there, are named.
+    let none = run(args("7-9", &model));
+    assert!(String::from_utf8_lossy(&none.stderr).contains("no sequence with an id in 7-9"));
+    let missing = tmp.path().join("missing.dmbn");
+    let gone = run(args("0-2", &missing));
+    assert!(!gone.status.success());
+    assert!(String::from_utf8_lossy(&gone.stderr).contains("missing.dmbn"));
+}

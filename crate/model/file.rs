@@ -59,6 +59,11 @@ pub struct ModelHeader {
     pub config: ModelConfig,
     /// Joint statistics the model was trained with.
     pub normalization: Normalization,
+    /// A factor on every predicted joint σ, fitted after training on sequences the model did
+    /// not train on (`dmbn calibrate`) so that mean ± 2σ holds about 95% of the truth; absent:
+    /// 1 (the σ as trained).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub joint_sigma_scale: Option<f32>,
     /// The weight section.
     pub weights: WeightsInfo,
 }
@@ -85,6 +90,7 @@ pub fn save_bytes(
         producer: format!("dmbn {}", env!("CARGO_PKG_VERSION")),
         config: model.config().clone(),
         normalization: *normalization,
+        joint_sigma_scale: None,
         weights: WeightsInfo {
             format: "burnpack".into(),
             dtype: if half {
@@ -97,7 +103,31 @@ pub fn save_bytes(
             parameters: model.num_params() as u64,
         },
     };
-    let header = serde_json::to_vec_pretty(&header)
+    assemble(&header, &weights)
+}
+
+/// The model file `bytes` with its joint σ scale set to `scale` (see
+/// [`ModelHeader::joint_sigma_scale`]); the weights are kept as they are.
+pub fn with_joint_sigma_scale(bytes: &[u8], scale: f32) -> Result<Vec<u8>, ModelError> {
+    check_joint_sigma_scale(Some(scale))?;
+    let (mut header, weights) = split(bytes)?;
+    header.joint_sigma_scale = Some(scale);
+    assemble(&header, weights)
+}
+
+/// A joint σ scale, if any, is a finite number above 0.
+fn check_joint_sigma_scale(scale: Option<f32>) -> Result<(), ModelError> {
+    match scale {
+        Some(s) if !(s.is_finite() && s > 0.0) => Err(ModelError::Header(format!(
+            "joint_sigma_scale is {s}: expected a finite number above 0"
+        ))),
+        _ => Ok(()),
+    }
+}
+
+/// The file's bytes: magic, version, `header` as JSON and `weights`.
+fn assemble(header: &ModelHeader, weights: &[u8]) -> Result<Vec<u8>, ModelError> {
+    let header = serde_json::to_vec_pretty(header)
         .map_err(|e| ModelError::Header(format!("cannot write the header: {e}")))?;
     let header_len = u32::try_from(header.len())
         .map_err(|_| ModelError::Header("header longer than 4 GiB".into()))?;
@@ -107,7 +137,7 @@ pub fn save_bytes(
     out.extend_from_slice(&header_len.to_le_bytes());
     out.extend_from_slice(&header);
     out.extend_from_slice(&(weights.len() as u64).to_le_bytes());
-    out.extend_from_slice(&weights);
+    out.extend_from_slice(weights);
     Ok(out)
 }
 
@@ -198,6 +228,7 @@ fn split(bytes: &[u8]) -> Result<(ModelHeader, &[u8]), ModelError> {
         serde_json::from_slice(header).map_err(|e| ModelError::Header(e.to_string()))?;
     header.config.validate()?;
     check_normalization(&header.normalization)?;
+    check_joint_sigma_scale(header.joint_sigma_scale)?;
     if header.weights.format != "burnpack" {
         return Err(ModelError::Header(format!(
             "weights.format is {:?}: expected \"burnpack\"",

@@ -31,6 +31,9 @@ pub struct SafetensorsHeader {
     pub config: ModelConfig,
     /// Joint statistics the model was trained with.
     pub normalization: Normalization,
+    /// The model file's factor on every joint σ, if it was calibrated.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub joint_sigma_scale: Option<f32>,
 }
 
 /// The model file in `model_file` as safetensors bytes, f32 (or f16 when `half`).
@@ -40,6 +43,7 @@ pub fn export_safetensors(model_file: &[u8], half: bool) -> Result<Vec<u8>, Mode
         producer: format!("dmbn {}", env!("CARGO_PKG_VERSION")),
         config,
         normalization,
+        joint_sigma_scale: super::read_header(model_file)?.joint_sigma_scale,
     };
     let header = serde_json::to_string(&header)
         .map_err(|e| ModelError::Header(format!("cannot write the metadata: {e}")))?;
@@ -95,7 +99,11 @@ pub fn import_safetensors(bytes: &[u8], half: bool) -> Result<Vec<u8>, ModelErro
             "tensor `{path}` is missing"
         )));
     }
-    save_bytes(&model, &header.normalization, half)
+    let bytes = save_bytes(&model, &header.normalization, half)?;
+    match header.joint_sigma_scale {
+        Some(scale) => super::with_joint_sigma_scale(&bytes, scale),
+        None => Ok(bytes),
+    }
 }
 
 /// The `dmbn` metadata entry of a safetensors file.

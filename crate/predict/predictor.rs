@@ -13,6 +13,8 @@ use crate::model::{
 pub struct Predictor {
     model: Model,
     normalization: Normalization,
+    /// The file's factor on every joint σ (1 without one; `dmbn calibrate`).
+    joint_sigma_scale: f32,
     device: Device,
 }
 
@@ -28,6 +30,7 @@ impl Predictor {
         Predictor {
             model,
             normalization,
+            joint_sigma_scale: 1.0,
             device: Device::flex(),
         }
     }
@@ -46,9 +49,22 @@ impl Predictor {
     ) -> Result<Self, ModelError> {
         let (model, normalization, _) =
             model::load_bytes_expecting(bytes, &Device::flex(), kind, image_size)?;
+        let scale = model::read_header(bytes)?.joint_sigma_scale;
         // One constructor: the loaded weights are frozen as `new`'s are (not compared again
         // on every call).
-        Ok(Self::new(model, normalization))
+        Ok(Self::new(model, normalization).with_joint_sigma_scale(scale.unwrap_or(1.0)))
+    }
+
+    /// The predictor with every joint σ multiplied by `scale` (a calibration fitted after
+    /// training; see [`crate::model::ModelHeader::joint_sigma_scale`]).
+    pub fn with_joint_sigma_scale(mut self, scale: f32) -> Self {
+        self.joint_sigma_scale = scale;
+        self
+    }
+
+    /// The factor on every joint σ: 1 unless the file was calibrated.
+    pub fn joint_sigma_scale(&self) -> f32 {
+        self.joint_sigma_scale
     }
 
     /// The model file at `path`.
@@ -126,7 +142,7 @@ impl Predictor {
                 &model::values(p.image_mean),
                 &model::values(p.image_sigma),
                 &model::values(p.joint_mean),
-                &model::values(p.joint_sigma),
+                &model::values(p.joint_sigma.mul_scalar(self.joint_sigma_scale)),
                 &self.normalization,
             );
         }

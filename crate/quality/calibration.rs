@@ -1,5 +1,10 @@
 use serde::{Deserialize, Serialize};
 
+use super::Scenario;
+use crate::data::{Sequence, JOINTS};
+use crate::model::ModelError;
+use crate::predict::{Observations, Predictor};
+
 /// Central coverage levels of the calibration curve: a calibrated Gaussian puts this fraction
 /// of the truth within mean ± z·σ, z = [`LEVEL_Z`].
 pub const LEVELS: [f64; 10] = [0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 0.95];
@@ -94,6 +99,46 @@ pub struct Calibration {
     pub moving_pixels: Option<CoverageSummary>,
 }
 
+/// A calibrated Gaussian's ±2σ coverage.
+pub const TWO_SIGMA: f64 = 0.954_5;
+
+/// The joints' errors in units of their predicted σ, |truth − mean| / σ, at the scored steps of
+/// `scenario` that `predictor` did not observe on `seq`: what a joint σ scale is fitted on.
+/// Empty when the sequence is too short for the scenario.
+pub fn joint_z_scores(
+    predictor: &Predictor,
+    seq: &Sequence,
+    scenario: Scenario,
+    observations: usize,
+    blend: f32,
+) -> Result<Vec<f64>, ModelError> {
+    let Some(steps) = scenario.steps(seq.len(), observations) else {
+        return Ok(Vec::new());
+    };
+    let observed = Observations::from_sequence(seq, &steps.observed)?;
+    let prediction = predictor.predict(&observed, &seq.times(), blend)?;
+    let mut z = Vec::new();
+    for &k in steps.scored.iter().filter(|k| !steps.observed.contains(k)) {
+        for j in 0..JOINTS {
+            let i = k * JOINTS + j;
+            let error = (seq.joints[k][j] - prediction.joint_mean[i]).abs() as f64;
+            z.push(error / prediction.joint_sigma[i] as f64);
+        }
+    }
+    Ok(z)
+}
+
+/// The factor on σ that makes mean ± 2σ hold [`TWO_SIGMA`] of the values whose standardised
+/// errors are `z` (their quantile at that level, halved); `None` without values.
+pub fn two_sigma_scale(mut z: Vec<f64>) -> Option<f64> {
+    if z.is_empty() {
+        return None;
+    }
+    z.sort_by(f64::total_cmp);
+    let at = ((z.len() as f64 * TWO_SIGMA).ceil() as usize).clamp(1, z.len()) - 1;
+    Some(z[at] / 2.0)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -139,6 +184,21 @@ mod tests {
         );
         assert!((merged.sigma_to_rmse - calibrated.sigma_to_rmse).abs() < 1e-12);
         assert_eq!(Coverage::default().finish(), None);
+    }
+
+    /// Errors drawn with σ = 1.5 and predicted with σ = 1: the scale is 1.5; coverage at ±2σ
+    /// after scaling is the calibrated one.
+    #[test]
+    fn the_two_sigma_scale_calibrates_the_band() {
+        let n = 20_000;
+        let z: Vec<f64> = (0..n)
+            .map(|i| 1.5 * inverse_normal((i as f64 + 0.5) / n as f64).abs())
+            .collect();
+        let scale = two_sigma_scale(z.clone()).unwrap();
+        assert!((scale - 1.5).abs() < 0.01, "{scale}");
+        let covered = z.iter().filter(|&&v| v <= 2.0 * scale).count() as f64 / n as f64;
+        assert!((covered - TWO_SIGMA).abs() < 1e-3, "{covered}");
+        assert_eq!(two_sigma_scale(Vec::new()), None);
     }
 
     /// Φ⁻¹ by bisection on erf (the test's own, independent of `LEVEL_Z`).

@@ -12,7 +12,10 @@ mod report;
 mod scenario;
 
 pub use accumulator::{Accumulator, Quality};
-pub use calibration::{Calibration, Coverage, CoverageSummary, LEVELS, MOVING};
+pub use calibration::{
+    joint_z_scores, two_sigma_scale, Calibration, Coverage, CoverageSummary, LEVELS, MOVING,
+    TWO_SIGMA,
+};
 pub use forecast::score_steps;
 pub use mean_motion::MeanMotion;
 pub use object_mask::{is_object, OBJECT_COLOUR};

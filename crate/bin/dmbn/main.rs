@@ -5,6 +5,8 @@
 #[cfg(not(target_arch = "wasm32"))]
 mod args;
 #[cfg(not(target_arch = "wasm32"))]
+mod calibrate;
+#[cfg(not(target_arch = "wasm32"))]
 mod error;
 #[cfg(not(target_arch = "wasm32"))]
 mod eval;
@@ -32,7 +34,7 @@ mod simulate;
 #[command(
     name = "dmbn",
     version,
-    about = "DMBN datasets and models: simulate, inspect, predict, eval, probe, score, imitate, export, import"
+    about = "DMBN datasets and models: simulate, inspect, predict, eval, probe, score, calibrate, imitate, export, import"
 )]
 struct Cli {
     #[command(subcommand)]
@@ -76,6 +78,13 @@ enum Command {
     /// table per scenario (joint RMSE in radians, gripper error, image MSE, errors at the
     /// observed steps, object visibility, NLL); --json writes them.
     Score(score::ScoreArgs),
+    /// Scale a model file's joint σ so that mean ± 2σ holds 95% of the truth.
+    ///
+    /// Pools the joints' errors in units of their σ at the unobserved steps of both scenarios
+    /// of `score` on --ids (ids the model did not train on) and writes the model with the
+    /// factor that makes ±2σ cover 95.45% of them in its header; every prediction of the file
+    /// (natively, in the page, in the PyTorch twin) applies it.
+    Calibrate(calibrate::CalibrateArgs),
     /// The mirror: models see a demonstration and the simulated arm performs what they imagine.
     ///
     /// frames: K evenly spaced frames observed (no joints), the arm performs the predicted
@@ -106,6 +115,7 @@ fn main() -> std::process::ExitCode {
         Command::Eval(args) => eval::run(args),
         Command::Probe(args) => probe::run(args),
         Command::Score(args) => score::run(args),
+        Command::Calibrate(args) => calibrate::run(args),
         Command::Imitate(args) => imitate::run(args),
         Command::Export(args) => exchange::export(args),
         Command::Import(args) => exchange::import(args),
