@@ -3,6 +3,7 @@
 
 import { IMAGE_SIZE } from "./config.js";
 import { drawTableMap, show } from "./draw.js";
+import { describe } from "./imitate.js";
 import { chooseRandom, clampInt, mulberry32, updateObsInfo } from "./observations.js";
 import { play } from "./playback.js";
 import { cancelPrediction } from "./prediction.js";
@@ -93,6 +94,7 @@ export function buildShown() {
   ui.live.hidden = ui.errorPanel.hidden = mode !== "live";
   const imitate = mode === "imitate";
   ui.imitatePanel.hidden = !imitate;
+  if (imitate) describe();
   ui.sigmaPanel.hidden = imitate;
   ui.trueCaption.textContent = imitate ? "Demonstration" : "True frame";
   ui.predCaption.textContent = imitate ? "The robot's performance" : "Predicted mean ";

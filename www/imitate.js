@@ -50,8 +50,13 @@ export function toggleDemonstration() {
   show(state.demonstration);
 }
 
-/** The episode, observations or model changed: no performance is current. */
+/**
+ * The episode, observations or model changed: no performance is current. Called by every
+ * cancelled prediction (live mode: every forecast), so it touches the page only when there
+ * was one: a change of `body`'s data attributes restyles the whole page.
+ */
 export function clearPerformances() {
+  if (!state.imagined && !state.demonstration && !state.performance) return;
   state.imagined = state.demonstration = state.performance = null;
   describe();
 }
@@ -101,8 +106,8 @@ function show(performance) {
   describe();
 }
 
-/** The badge, the button and the note of the imitate panel. */
-function describe() {
+/** The badge, the button and the note of the imitate panel (entering the mode: episodes.js). */
+export function describe() {
   const p = state.performance;
   const { body } = document;
   body.dataset.performed = p?.source ?? "";

@@ -162,8 +162,20 @@ pub fn load_bytes_expecting(
     kind: Option<ModelKind>,
     image_size: Option<usize>,
 ) -> Result<(Model, Normalization, ModelConfig), ModelError> {
+    let (model, header) = load_with_header(bytes, device, kind, image_size)?;
+    Ok((model, header.normalization, header.config))
+}
+
+/// As [`load_bytes_expecting`], with the whole header (the joint σ scale too): the file is
+/// framed, parsed and checksummed once.
+pub fn load_with_header(
+    bytes: &[u8],
+    device: &Device,
+    kind: Option<ModelKind>,
+    image_size: Option<usize>,
+) -> Result<(Model, ModelHeader), ModelError> {
     let (header, weights) = split(bytes)?;
-    let config = header.config;
+    let config = &header.config;
     if let Some(expected) = kind {
         if config.kind != expected {
             return Err(ModelError::Kind {
@@ -194,7 +206,7 @@ pub fn load_bytes_expecting(
             config.kind, result.unused
         )));
     }
-    Ok((model, header.normalization, config))
+    Ok((model, header))
 }
 
 /// Checks the framing, parses and validates the header, checks the weights' checksum and

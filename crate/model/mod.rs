@@ -56,8 +56,8 @@ pub use dmbn_pte::DmbnPte;
 pub use encoded_contexts::EncodedContexts;
 pub use error::ModelError;
 pub use file::{
-    load_bytes, load_bytes_expecting, read_header, save_bytes, with_joint_sigma_scale, ModelHeader,
-    WeightDType,
+    load_bytes, load_bytes_expecting, load_with_header, read_header, save_bytes,
+    with_joint_sigma_scale, ModelHeader, WeightDType,
 };
 pub use gaussian::bounded_sigma;
 pub use image_decoder::{upsample2, DecodedFrames, ImageDecoder, ImageDecoderConfig};

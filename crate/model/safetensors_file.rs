@@ -17,7 +17,7 @@ use burn::tensor::{DType, Device};
 use safetensors::{Dtype, SafeTensors};
 use serde::{Deserialize, Serialize};
 
-use super::{load_bytes, save_bytes, Model, ModelConfig, ModelError, Normalization};
+use super::{load_with_header, save_bytes, Model, ModelConfig, ModelError, Normalization};
 
 /// The metadata key holding [`SafetensorsHeader`] as JSON.
 pub const METADATA_KEY: &str = "dmbn";
@@ -38,12 +38,12 @@ pub struct SafetensorsHeader {
 
 /// The model file in `model_file` as safetensors bytes, f32 (or f16 when `half`).
 pub fn export_safetensors(model_file: &[u8], half: bool) -> Result<Vec<u8>, ModelError> {
-    let (model, normalization, config) = load_bytes(model_file, &Device::flex())?;
+    let (model, file) = load_with_header(model_file, &Device::flex(), None, None)?;
     let header = SafetensorsHeader {
         producer: format!("dmbn {}", env!("CARGO_PKG_VERSION")),
-        config,
-        normalization,
-        joint_sigma_scale: super::read_header(model_file)?.joint_sigma_scale,
+        config: file.config,
+        normalization: file.normalization,
+        joint_sigma_scale: file.joint_sigma_scale,
     };
     let header = serde_json::to_string(&header)
         .map_err(|e| ModelError::Header(format!("cannot write the metadata: {e}")))?;

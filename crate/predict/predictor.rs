@@ -47,12 +47,11 @@ impl Predictor {
         kind: Option<ModelKind>,
         image_size: Option<usize>,
     ) -> Result<Self, ModelError> {
-        let (model, normalization, _) =
-            model::load_bytes_expecting(bytes, &Device::flex(), kind, image_size)?;
-        let scale = model::read_header(bytes)?.joint_sigma_scale;
+        let (model, header) = model::load_with_header(bytes, &Device::flex(), kind, image_size)?;
+        let scale = header.joint_sigma_scale.unwrap_or(1.0);
         // One constructor: the loaded weights are frozen as `new`'s are (not compared again
         // on every call).
-        Ok(Self::new(model, normalization).with_joint_sigma_scale(scale.unwrap_or(1.0)))
+        Ok(Self::new(model, header.normalization).with_joint_sigma_scale(scale))
     }
 
     /// The predictor with every joint σ multiplied by `scale` (a calibration fitted after

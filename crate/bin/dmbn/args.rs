@@ -1,10 +1,10 @@
 //! What several commands take: parsers for their shared arguments, and the model and
 //! sequence that `--model`, `--data` and `--sequence` name.
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use clap::Args;
 
-use dmbn::data::{Dataset, Sequence};
+use dmbn::data::{Dataset, Sequence, SequenceRef};
 use dmbn::predict::Predictor;
 
 use crate::error::CliError;
@@ -24,6 +24,33 @@ pub fn parse_ids(s: &str) -> Result<(u32, u32), String> {
         return Err(format!("{s:?}: A ({a}) must not exceed B ({b})"));
     }
     Ok((a, b))
+}
+
+/// Whether `id` lies in the range `ids` (every id without one).
+pub fn in_ids(id: u32, ids: Option<(u32, u32)>) -> bool {
+    ids.is_none_or(|(a, b)| (a..=b).contains(&id))
+}
+
+/// The sequences of `dataset` (opened from `data`) whose ids lie in `ids` (`--ids`); an error
+/// naming the folder and the range when there is none.
+pub fn sequences_in<'a>(
+    dataset: &'a Dataset,
+    data: &Path,
+    ids: Option<(u32, u32)>,
+) -> Result<Vec<&'a SequenceRef>, CliError> {
+    let refs: Vec<_> = dataset
+        .sequences()
+        .iter()
+        .filter(|s| in_ids(s.id, ids))
+        .collect();
+    if refs.is_empty() {
+        let (a, b) = ids.unwrap_or_default();
+        return Err(CliError::Usage(format!(
+            "{}: no sequence with an id in {a}-{b}",
+            data.display()
+        )));
+    }
+    Ok(refs)
 }
 
 /// A sequence as `ID/ACTION` (`--sequence`).

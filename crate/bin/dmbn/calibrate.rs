@@ -4,14 +4,14 @@ use std::path::PathBuf;
 
 use clap::Args;
 
-use dmbn::data::{write_atomic, Dataset};
+use dmbn::data::Dataset;
 use dmbn::model::with_joint_sigma_scale;
 use dmbn::predict::Predictor;
 use dmbn::quality::{joint_z_scores, two_sigma_scale, Scenario, TWO_SIGMA};
 
-use crate::args::{parse_blend, parse_ids};
+use crate::args::{parse_blend, parse_ids, sequences_in};
 use crate::error::CliError;
-use crate::output::progress;
+use crate::output::{progress, write};
 
 #[derive(Args)]
 pub struct CalibrateArgs {
@@ -46,17 +46,7 @@ pub fn run(args: CalibrateArgs) -> Result<(), CliError> {
     })?;
     let dataset = Dataset::open(&args.data)?;
     let (a, b) = args.ids;
-    let refs: Vec<_> = dataset
-        .sequences()
-        .iter()
-        .filter(|s| (a..=b).contains(&s.id))
-        .collect();
-    if refs.is_empty() {
-        return Err(CliError::Usage(format!(
-            "{}: no sequence with an id in {a}-{b}",
-            args.data.display()
-        )));
-    }
+    let refs = sequences_in(&dataset, &args.data, Some(args.ids))?;
     let size = predictor.model().image_size() as u32;
     let bar = progress(refs.len(), "calibrating");
     let mut z = Vec::new();
@@ -84,7 +74,7 @@ pub fn run(args: CalibrateArgs) -> Result<(), CliError> {
             ))
         })?;
     let scale = predictor.joint_sigma_scale() * factor as f32;
-    write_atomic(&args.out, &with_joint_sigma_scale(&bytes, scale)?)?;
+    write(&args.out, &with_joint_sigma_scale(&bytes, scale)?)?;
     println!(
         "joint σ × {factor:.3} (the file's scale {scale:.3}): ±2σ held {:.1}% of the joints on ids {a}-{b}, now {:.1}%",
         100.0 * before,

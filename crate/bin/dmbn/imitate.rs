@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use clap::{Args, ValueEnum};
 use serde::Serialize;
 
-use dmbn::data::{Dataset, Sequence};
+use dmbn::data::{Dataset, Sequence, SequenceRef};
 use dmbn::imitate::{
     imitate, mean_motion, replay, ImitateError, ImitationReport, OutcomeSums, Task,
 };
@@ -15,7 +15,7 @@ use dmbn::predict::Predictor;
 use dmbn::quality::MeanMotion;
 use dmbn::sim::{Action, Outcome};
 
-use crate::args::{parse_blend, parse_ids};
+use crate::args::{in_ids, parse_blend, parse_ids, sequences_in};
 use crate::error::CliError;
 use crate::output::{model_name, progress, write_json};
 
@@ -88,13 +88,9 @@ pub fn run(args: ImitateArgs) -> Result<(), CliError> {
         .map(|path| Ok((model_name(path), Predictor::load(path)?)))
         .collect::<Result<Vec<_>, CliError>>()?;
     let dataset = Dataset::open(&args.data)?;
-    let in_range =
-        |id: u32, range: Option<(u32, u32)>| range.is_none_or(|(a, b)| (a..=b).contains(&id));
-    let read = |range: Option<(u32, u32)>, size: usize| {
-        dataset
-            .sequences()
-            .iter()
-            .filter(|s| in_range(s.id, range))
+    let imitated = sequences_in(&dataset, &args.data, args.ids)?;
+    let read = |refs: &[&SequenceRef], size: usize| {
+        refs.iter()
             .map(|r| {
                 let action: Action = r.action.parse()?;
                 Ok((r.id, action, dataset.read(r, Some(size as u32))?))
@@ -106,21 +102,19 @@ pub fn run(args: ImitateArgs) -> Result<(), CliError> {
     for (_, p) in &predictors {
         let size = p.model().image_size();
         if let Entry::Vacant(entry) = by_size.entry(size) {
-            entry.insert(read(args.ids, size)?);
+            entry.insert(read(&imitated, size)?);
         }
     }
     let demos = by_size.values().next().expect("at least one model");
-    if demos.is_empty() {
-        return Err(CliError::Usage(format!(
-            "{}: no sequence with an id in {:?}",
-            args.data.display(),
-            args.ids.unwrap_or_default()
-        )));
-    }
     let fitted;
     let reference = match args.mean_ids {
         Some(range) => {
-            fitted = read(Some(range), demos[0].2.image_size as usize)?;
+            let refs: Vec<_> = dataset
+                .sequences()
+                .iter()
+                .filter(|s| in_ids(s.id, Some(range)))
+                .collect();
+            fitted = read(&refs, demos[0].2.image_size as usize)?;
             &fitted
         }
         None => demos,

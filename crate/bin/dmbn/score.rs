@@ -10,7 +10,7 @@ use dmbn::figure::{calibration_plot, save_png};
 use dmbn::predict::Predictor;
 use dmbn::quality::{score_sequence, Accumulator, MeanMotion, QualityReport, QualityRow, Scenario};
 
-use crate::args::{parse_blend, parse_ids};
+use crate::args::{in_ids, parse_blend, parse_ids, sequences_in};
 use crate::error::CliError;
 use crate::output::{model_name, progress, write_json};
 
@@ -66,20 +66,7 @@ pub fn run(args: ScoreArgs) -> Result<(), CliError> {
         .map(|path| Ok((path, Predictor::load(path)?)))
         .collect::<Result<Vec<_>, CliError>>()?;
     let dataset = Dataset::open(&args.data)?;
-    let in_range =
-        |id: u32, range: Option<(u32, u32)>| range.is_none_or(|(a, b)| (a..=b).contains(&id));
-    let refs: Vec<_> = dataset
-        .sequences()
-        .iter()
-        .filter(|s| in_range(s.id, args.ids))
-        .collect();
-    if refs.is_empty() {
-        return Err(CliError::Usage(format!(
-            "{}: no sequence with an id in {:?}",
-            args.data.display(),
-            args.ids.unwrap_or_default()
-        )));
-    }
+    let refs = sequences_in(&dataset, &args.data, args.ids)?;
     let scenarios: Vec<Scenario> = match args.scenario {
         ScenarioArg::Interp => vec![Scenario::Interp],
         ScenarioArg::Extrap => vec![Scenario::Extrap],
@@ -104,7 +91,7 @@ pub fn run(args: ScoreArgs) -> Result<(), CliError> {
                 let reference = dataset
                     .sequences()
                     .iter()
-                    .filter(|s| in_range(s.id, Some(range)))
+                    .filter(|s| in_ids(s.id, Some(range)))
                     .map(|r| Ok((r.action.clone(), dataset.read(r, Some(size as u32))?)))
                     .collect::<Result<Vec<_>, CliError>>()?;
                 let fitted = MeanMotion::fit(reference.iter().map(|(a, s)| (a.as_str(), s)));
