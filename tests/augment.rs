@@ -92,6 +92,18 @@ fn lengths_and_freezes_follow_the_settings() {
     let slow = half_speed.apply(&seq, &mut rng);
     assert!((118..=120).contains(&slow.len()), "{}", slow.len());
 
+    // A freeze drawn as a fraction covers that fraction of the warped sequence.
+    for fraction in [0.1, 0.5, 0.9] {
+        let config = TimeWarpConfig {
+            freeze_fraction: Some([fraction, fraction]),
+            ..only_freeze(0)
+        };
+        let s = steps(&config.apply(&seq, &mut rng));
+        let longest = s.chunk_by(|a, b| a == b).map(<[usize]>::len).max().unwrap();
+        let covered = (longest - 1) as f64 / s.len() as f64;
+        assert!((covered - fraction).abs() < 0.01, "{fraction}: {covered}");
+    }
+
     let never = TimeWarpConfig {
         probability: 0.0,
         ..TimeWarpConfig::default()
@@ -150,6 +162,20 @@ fn bad_warp_settings_are_named() {
                 ..Default::default()
             },
             "freeze_length",
+        ),
+        (
+            TimeWarpConfig {
+                freeze_fraction: Some([0.2, 1.0]),
+                ..Default::default()
+            },
+            "freeze_fraction",
+        ),
+        (
+            TimeWarpConfig {
+                freeze_fraction: Some([0.5, 0.1]),
+                ..Default::default()
+            },
+            "freeze_fraction",
         ),
     ];
     for (config, field) in bad {

@@ -22,8 +22,38 @@ fn message(err: JsError) -> String {
     js_sys::Error::from(JsValue::from(err)).message().into()
 }
 
+// Arguments as JS passes them (strings as `"grasp".into()`).
+
+fn num(n: f64) -> JsValue {
+    JsValue::from_f64(n)
+}
+
+fn idx(k: usize) -> JsValue {
+    num(k as f64)
+}
+
+fn u8s(v: &[u8]) -> JsValue {
+    js_sys::Uint8Array::from(v).into()
+}
+
+fn f32s(v: &[f32]) -> JsValue {
+    js_sys::Float32Array::from(v).into()
+}
+
+fn u32s(v: &[u32]) -> JsValue {
+    js_sys::Uint32Array::from(v).into()
+}
+
+/// An array of strings.
+fn strs<S: AsRef<str>>(v: &[S]) -> JsValue {
+    v.iter()
+        .map(|s| JsValue::from(s.as_ref()))
+        .collect::<js_sys::Array>()
+        .into()
+}
+
 fn grasp7() -> Episode {
-    run_episode("grasp".into(), 7.0, 64).expect("valid arguments")
+    run_episode("grasp".into(), num(7.0), num(64.0)).expect("valid arguments")
 }
 
 #[wasm_bindgen_test]
@@ -57,7 +87,7 @@ fn arrays_have_episode_shapes() {
         .chain(&ep.object())
         .all(|v| v.is_finite()));
     assert_eq!(
-        ep.frame(t - 1).unwrap(),
+        ep.frame(idx(t - 1)).unwrap(),
         ep.frames()[(t - 1) * 64 * 64 * 3..]
     );
 }
@@ -65,7 +95,7 @@ fn arrays_have_episode_shapes() {
 #[wasm_bindgen_test]
 fn frame_shows_table_and_yellow_object() {
     let ep = grasp7();
-    let frame = ep.frame(0).unwrap();
+    let frame = ep.frame(idx(0)).unwrap();
     let pixels: Vec<&[u8]> = frame.chunks(3).collect();
     let dark = pixels.iter().any(|p| p.iter().all(|&c| c < 80));
     let yellow = pixels.iter().any(|p| p[0] > 150 && p[1] > 150 && p[2] < 80);
@@ -76,8 +106,8 @@ fn frame_shows_table_and_yellow_object() {
 
 #[wasm_bindgen_test]
 fn stepping_matches_run_episode() {
-    let ep = run_episode("move".into(), 3.0, 64).unwrap();
-    let mut sim = Simulator::new("move".into(), 3.0, 64).unwrap();
+    let ep = run_episode("move".into(), num(3.0), num(64.0)).unwrap();
+    let mut sim = Simulator::new("move".into(), num(3.0), num(64.0)).unwrap();
     assert_eq!(
         (sim.steps(), sim.step_index(), sim.image_size()),
         (ep.steps(), 0, 64)
@@ -88,7 +118,7 @@ fn stepping_matches_run_episode() {
         assert_eq!(sim.endpoint(), ep.endpoint()[k * 7..(k + 1) * 7]);
         assert_eq!(sim.object(), ep.object()[k * 3..(k + 1) * 3]);
         if k % 20 == 0 {
-            assert_eq!(sim.frame(), ep.frame(k).unwrap());
+            assert_eq!(sim.frame(), ep.frame(idx(k)).unwrap());
         }
         if !sim.step() {
             break;
@@ -102,7 +132,8 @@ fn stepping_matches_run_episode() {
 
 #[wasm_bindgen_test]
 fn with_object_places_the_object() {
-    let sim = Simulator::with_object("grasp".into(), 0.05, 0.5, 1.0, 128).unwrap();
+    let sim =
+        Simulator::with_object("grasp".into(), num(0.05), num(0.5), num(1.0), num(128.0)).unwrap();
     let [x, y, _] = sim.object()[..] else {
         panic!("object has 3 values")
     };
@@ -126,29 +157,48 @@ fn placement_region_is_a_plain_object() {
 
 #[wasm_bindgen_test]
 fn bad_arguments_throw() {
-    let unknown = message(Simulator::new("jump".into(), 0.0, 64).err().unwrap());
-    assert!(unknown.contains("unknown action"), "{unknown}");
-    let not_string = message(run_episode(3.into(), 0.0, 64).err().unwrap());
+    let unknown = message(
+        Simulator::new("jump".into(), num(0.0), num(64.0))
+            .err()
+            .unwrap(),
+    );
     assert!(
-        not_string.contains("action must be a string"),
+        unknown.contains(r#"action must be "grasp" or "move", got "jump""#),
+        "{unknown}"
+    );
+    let not_string = message(run_episode(num(3.0), num(0.0), num(64.0)).err().unwrap());
+    assert!(
+        not_string.contains(r#"action must be "grasp" or "move", got the number 3"#),
         "{not_string}"
     );
-    let size = message(run_episode("grasp".into(), 0.0, 100).err().unwrap());
+    let size = message(
+        run_episode("grasp".into(), num(0.0), num(100.0))
+            .err()
+            .unwrap(),
+    );
     assert!(size.contains("image size 100"), "{size}");
     for seed in [-1.0, 0.5, f64::NAN, f64::INFINITY, 2f64.powi(54)] {
-        let err = message(run_episode("grasp".into(), seed, 64).err().unwrap());
-        assert!(err.contains("seed"), "{err}");
-    }
-    for (x, y) in [(1.0, 0.5), (0.0, 0.0), (f32::NAN, 0.5)] {
         let err = message(
-            Simulator::with_object("move".into(), x, y, 0.0, 64)
+            run_episode("grasp".into(), num(seed), num(64.0))
                 .err()
                 .unwrap(),
         );
-        assert!(err.contains("outside the placement region"), "{err}");
+        assert!(err.contains("seed must be an integer"), "{err}");
+    }
+    let with_object = |x: f64, y: f64| {
+        let sim = Simulator::with_object("move".into(), num(x), num(y), num(0.0), num(64.0));
+        message(sim.err().unwrap())
+    };
+    // Outside `placementRegion()`, named by the coordinate.
+    for (x, y, name) in [(1.0, 0.5, "x"), (0.0, 0.0, "y"), (f64::NAN, 0.5, "x")] {
+        let err = with_object(x, y);
+        assert!(
+            err.starts_with(&format!("{name} must be a number in")),
+            "{err}"
+        );
     }
     let ep = grasp7();
-    let err = message(ep.frame(ep.steps()).err().unwrap());
+    let err = message(ep.frame(idx(ep.steps())).err().unwrap());
     assert!(err.contains("out of range"), "{err}");
 }
 
@@ -171,13 +221,25 @@ fn observed(ep: &Episode) -> (Vec<u8>, Vec<f32>, Vec<f32>) {
 }
 
 fn golden_prediction() -> (Episode, Prediction) {
-    let model = ModelHandle::from_bytes(golden_prediction::MODEL).expect("shipped weights load");
+    let model =
+        ModelHandle::from_bytes(u8s(golden_prediction::MODEL)).expect("shipped weights load");
     assert_eq!(model.kind(), "dmbn");
     assert_eq!(model.image_size(), 64);
-    let ep = run_episode("grasp".into(), golden_prediction::SEED as f64, 64).unwrap();
+    let ep = run_episode(
+        "grasp".into(),
+        num(golden_prediction::SEED as f64),
+        num(64.0),
+    )
+    .unwrap();
     let (frames, joints, times) = observed(&ep);
     let prediction = model
-        .predict(frames, joints, times, ep.times(), golden_prediction::BLEND)
+        .predict(
+            u8s(&frames),
+            f32s(&joints),
+            f32s(&times),
+            f32s(&ep.times()),
+            num(golden_prediction::BLEND.into()),
+        )
         .expect("valid inputs");
     (ep, prediction)
 }
@@ -205,35 +267,40 @@ fn prediction_arrays_have_sequence_shapes() {
     assert_eq!(p.joint_mean().len(), t * 7);
     assert_eq!(p.joint_sigma().len(), t * 7);
     assert!(p.max_image_sigma() > 0.0);
-    assert_eq!(p.mean_frame(0).unwrap().len(), px);
-    assert_eq!(p.sigma_map(t - 1, p.max_image_sigma()).unwrap().len(), px);
-    assert!(message(p.mean_frame(t).err().unwrap()).contains("out of range"));
+    assert_eq!(p.mean_frame(idx(0)).unwrap().len(), px);
+    assert_eq!(
+        p.sigma_map(idx(t - 1), num(p.max_image_sigma().into()))
+            .unwrap()
+            .len(),
+        px
+    );
+    assert!(message(p.mean_frame(idx(t)).err().unwrap()).contains("out of range"));
 }
 
 #[wasm_bindgen_test]
 fn bad_model_input_throws() {
     let bytes = golden_prediction::MODEL;
-    let err = message(ModelHandle::from_bytes(&bytes[..1000]).err().unwrap());
+    let err = message(ModelHandle::from_bytes(u8s(&bytes[..1000])).err().unwrap());
     assert!(err.contains("truncated"), "{err}");
     let err = message(
-        ModelHandle::from_bytes(b"not a model at all")
+        ModelHandle::from_bytes(u8s(b"not a model at all"))
             .err()
             .unwrap(),
     );
     assert!(err.contains("not a dmbn model file"), "{err}");
 
-    let model = ModelHandle::from_bytes(bytes).unwrap();
+    let model = ModelHandle::from_bytes(u8s(bytes)).unwrap();
     let ep = grasp7();
     let (frames, joints, times) = observed(&ep);
-    let targets = vec![0.0, 0.5];
+    let (joints, times, targets) = (f32s(&joints), f32s(&times), f32s(&[0.0, 0.5]));
     let err = message(
         model
             .predict(
-                frames[..100].to_vec(),
+                u8s(&frames[..100]),
                 joints.clone(),
                 times.clone(),
                 targets.clone(),
-                0.5,
+                num(0.5),
             )
             .err()
             .unwrap(),
@@ -241,33 +308,48 @@ fn bad_model_input_throws() {
     assert!(err.contains("frames"), "{err}");
     let err = message(
         model
-            .predict(vec![], vec![], vec![], targets.clone(), 0.5)
+            .predict(u8s(&[]), f32s(&[]), f32s(&[]), targets.clone(), num(0.5))
             .err()
             .unwrap(),
     );
     assert!(err.contains("at least one observed step"), "{err}");
     let err = message(
         model
-            .predict(frames, joints, times, targets, 1.5)
+            .predict(u8s(&frames), joints, times, targets, num(1.5))
             .err()
             .unwrap(),
     );
-    assert!(err.contains("blend"), "{err}");
+    assert!(err.contains("blend must be a number in [0, 1]"), "{err}");
 }
 
 #[wasm_bindgen_test]
 fn eval_sequences_t_p_f() {
     let ep = grasp7();
-    let t = ep.eval_sequence("t", 0.0, None, None).unwrap();
+    let none = || JsValue::UNDEFINED;
+    let t = ep
+        .eval_sequence("t".into(), num(0.0), none(), none())
+        .unwrap();
     assert_eq!((t.frames(), t.times()), (ep.frames(), ep.times()));
-    let p = ep.eval_sequence("p", 3.0, None, None).unwrap();
+    let p = ep
+        .eval_sequence("p".into(), num(3.0), none(), none())
+        .unwrap();
     assert_eq!(p.frames(), ep.frames());
     assert_ne!(p.times(), ep.times());
-    let f = ep.eval_sequence("f", 0.0, Some(10), Some(20)).unwrap();
+    let f = ep
+        .eval_sequence("f".into(), num(0.0), idx(10), idx(20))
+        .unwrap();
     let n = 64 * 64 * 3;
     assert_eq!(f.frames()[15 * n..16 * n], ep.frames()[10 * n..11 * n]);
     assert_eq!(f.times(), ep.times());
-    assert!(message(ep.eval_sequence("x", 0.0, None, None).err().unwrap()).contains("t, p or f"));
+    let err = message(
+        ep.eval_sequence("x".into(), num(0.0), none(), none())
+            .err()
+            .unwrap(),
+    );
+    assert!(
+        err.contains(r#"mode must be "t", "p" or "f", got "x""#),
+        "{err}"
+    );
 }
 
 /// The largest difference between two arrays of the same length.
@@ -285,15 +367,20 @@ fn max_diff<T: Copy + Into<f32>>(a: &[T], b: &[T]) -> f32 {
 #[wasm_bindgen_test]
 fn encode_then_decode_in_chunks_matches_predict() {
     let (ep, p) = golden_prediction();
-    let m = ModelHandle::from_bytes(golden_prediction::MODEL).unwrap();
+    let m = ModelHandle::from_bytes(u8s(golden_prediction::MODEL)).unwrap();
     let (frames, joints, times) = observed(&ep);
     let encoding = m
-        .encode(frames, joints, times, golden_prediction::BLEND)
+        .encode(
+            u8s(&frames),
+            f32s(&joints),
+            f32s(&times),
+            num(golden_prediction::BLEND.into()),
+        )
         .unwrap();
     let chunks: Vec<Prediction> = ep
         .times()
         .chunks(10)
-        .map(|chunk| m.decode(&encoding, chunk.to_vec()).unwrap())
+        .map(|chunk| m.decode(&encoding, f32s(chunk)).unwrap())
         .collect();
     let cat = |part: fn(&Prediction) -> Vec<f32>| chunks.iter().flat_map(part).collect::<Vec<_>>();
     assert_eq!(
@@ -322,9 +409,10 @@ fn encode_then_decode_in_chunks_matches_predict() {
     let scale = golden_prediction::page_scale(maxima, max, 1e-4);
     let (sigma, whole, px) = (cat(Prediction::pixel_sigma), p.pixel_sigma(), 64 * 64);
     for k in 0..ep.steps() {
-        let cli = p.sigma_map(k, max).unwrap();
-        assert_eq!(heat_map(&whole[k * px..(k + 1) * px], max), cli, "step {k}");
-        let page = heat_map(&sigma[k * px..(k + 1) * px], scale);
+        let cli = p.sigma_map(idx(k), num(max.into())).unwrap();
+        let whole_map = heat_map(f32s(&whole[k * px..(k + 1) * px]), num(max.into())).unwrap();
+        assert_eq!(whole_map, cli, "step {k}");
+        let page = heat_map(f32s(&sigma[k * px..(k + 1) * px]), num(scale.into())).unwrap();
         assert!(
             max_diff(&page, &cli) <= 1.0,
             "step {k}: the page's heat map"
@@ -337,23 +425,23 @@ fn encode_then_decode_in_chunks_matches_predict() {
 #[wasm_bindgen_test]
 fn encoded_contexts_joined_and_selected_predict_as_predict() {
     let (ep, p) = golden_prediction();
-    let m = ModelHandle::from_bytes(golden_prediction::MODEL).unwrap();
+    let m = ModelHandle::from_bytes(u8s(golden_prediction::MODEL)).unwrap();
     let (frames, joints, times) = observed(&ep);
-    let (n, blend) = (64 * 64 * 3, golden_prediction::BLEND);
+    let (n, blend) = (64 * 64 * 3, num(golden_prediction::BLEND.into()));
     let one = |i: usize| {
         m.encode_contexts(
-            frames[i * n..(i + 1) * n].to_vec(),
-            joints[i * 7..(i + 1) * 7].to_vec(),
-            times[i..i + 1].to_vec(),
+            u8s(&frames[i * n..(i + 1) * n]),
+            f32s(&joints[i * 7..(i + 1) * 7]),
+            f32s(&times[i..i + 1]),
         )
         .unwrap()
     };
     // Encoded in the order 2, 0, 1, then put back in order.
     let set = one(2).cat(&one(0)).unwrap().cat(&one(1)).unwrap();
     assert_eq!(set.len(), 3);
-    let ordered = set.select(vec![1, 2, 0]).unwrap();
-    let encoding = m.represent(&ordered, blend).unwrap();
-    let q = m.decode(&encoding, ep.times()).unwrap();
+    let ordered = set.select(u32s(&[1, 2, 0])).unwrap();
+    let encoding = m.represent(&ordered, blend.clone()).unwrap();
+    let q = m.decode(&encoding, f32s(&ep.times())).unwrap();
     for (what, part) in [
         (
             "joint mean",
@@ -369,15 +457,11 @@ fn encoded_contexts_joined_and_selected_predict_as_predict() {
             "{what}: encoded contexts and predict differ by {diff}"
         );
     }
-    assert!(message(set.select(vec![3]).err().unwrap()).contains("out of range"));
-    assert!(message(m.represent(&set, 2.0).err().unwrap()).contains("blend"));
-    let other = ModelHandle::from_bytes(golden_prediction::MODEL).unwrap();
+    assert!(message(set.select(u32s(&[3])).err().unwrap()).contains("out of range"));
+    assert!(message(m.represent(&set, num(2.0)).err().unwrap()).contains("blend must be"));
+    let other = ModelHandle::from_bytes(u8s(golden_prediction::MODEL)).unwrap();
     let theirs = other
-        .encode_contexts(
-            frames[..n].to_vec(),
-            joints[..7].to_vec(),
-            times[..1].to_vec(),
-        )
+        .encode_contexts(u8s(&frames[..n]), f32s(&joints[..7]), f32s(&times[..1]))
         .unwrap();
     assert!(message(m.represent(&theirs, blend).err().unwrap()).contains("another model"));
     assert!(message(set.cat(&theirs).err().unwrap()).contains("another model"));
@@ -390,17 +474,17 @@ fn scores_match_native_within_1e_4() {
         model: dmbn::quality::Quality,
         baseline: dmbn::quality::Quality,
     }
-    let model = ModelHandle::from_bytes(golden_score::MODEL).unwrap();
-    let ep = run_episode("grasp".into(), golden_score::SEED as f64, 64).unwrap();
+    let model = ModelHandle::from_bytes(u8s(golden_score::MODEL)).unwrap();
+    let ep = run_episode("grasp".into(), num(golden_score::SEED as f64), num(64.0)).unwrap();
     let expected = golden_score::expected();
     assert_eq!(expected.len(), golden_score::SCENARIOS.len());
     for (scenario, want) in golden_score::SCENARIOS.iter().zip(&expected) {
         let value = model
             .score(
                 &ep,
-                scenario.name(),
-                golden_score::OBSERVATIONS,
-                golden_score::BLEND,
+                scenario.name().into(),
+                idx(golden_score::OBSERVATIONS),
+                num(golden_score::BLEND.into()),
             )
             .expect("valid arguments");
         let scores: Scores = serde_wasm_bindgen::from_value(value).expect("{model, baseline}");
@@ -413,18 +497,28 @@ fn scores_match_native_within_1e_4() {
             "{scenario}: wasm and native differ by {diff} at {at}"
         );
     }
-    let err = model.score(&ep, "all", 5, 0.5).map(|_| ()).unwrap_err();
-    assert!(message(err).contains("interp or extrap"));
+    let err = model
+        .score(&ep, "all".into(), num(5.0), num(0.5))
+        .map(|_| ())
+        .unwrap_err();
+    let err = message(err);
+    assert!(
+        err.contains(r#"scenario must be "interp" or "extrap", got "all""#),
+        "{err}"
+    );
 }
 
 #[wasm_bindgen_test]
 fn forecast_error_scores_drawn_frames_and_names_bad_layouts() {
     let ep = grasp7();
     let (frames, joints) = (ep.frames(), ep.joints());
+    let forecast_error = |true_frames: &[u8], frames: &[u8]| {
+        dmbn::web::forecast_error(u8s(true_frames), f32s(&joints), u8s(frames), f32s(&joints))
+    };
     let quality = |value: JsValue| -> dmbn::quality::Quality {
         serde_wasm_bindgen::from_value(value).expect("the fields of dmbn score --json")
     };
-    let exact = quality(dmbn::web::forecast_error(&frames, &joints, &frames, &joints).unwrap());
+    let exact = quality(forecast_error(&frames, &frames).unwrap());
     assert_eq!(exact.steps, ep.steps());
     // (The page's bytes become values in [0, 1] in f32, the truth in f64.)
     assert!(
@@ -434,12 +528,12 @@ fn forecast_error_scores_drawn_frames_and_names_bad_layouts() {
     // Every frame one step late: the error of holding each frame a step too long.
     let px = 64 * 64 * 3;
     let late: Vec<u8> = [&frames[..px], &frames[..frames.len() - px]].concat();
-    let lagged = quality(dmbn::web::forecast_error(&frames, &joints, &late, &joints).unwrap());
+    let lagged = quality(forecast_error(&frames, &late).unwrap());
     assert!(
         lagged.image_mse > 1e-5 && lagged.joint_rmse == 0.0,
         "{lagged:?}"
     );
-    let err = dmbn::web::forecast_error(&frames, &joints, &frames[1..], &joints).unwrap_err();
+    let err = forecast_error(&frames, &frames[1..]).unwrap_err();
     assert!(message(err).contains("frames:"));
 }
 
@@ -472,22 +566,28 @@ fn folder_files(ep: &Episode) -> Vec<(String, Vec<u8>)> {
     for k in 0..ep.steps() {
         let mut png = Vec::new();
         PngEncoder::new(&mut png)
-            .write_image(&ep.frame(k).unwrap(), 64, 64, ExtendedColorType::Rgb8)
+            .write_image(&ep.frame(idx(k)).unwrap(), 64, 64, ExtendedColorType::Rgb8)
             .unwrap();
         files.push((format!("mine/7/grasp/{k}.png"), png));
     }
     files
 }
 
+/// The paths of `files`, as the page lists a folder.
+fn paths(files: &[(String, Vec<u8>)]) -> JsValue {
+    let paths: Vec<&str> = files.iter().map(|f| f.0.as_str()).collect();
+    strs(&paths)
+}
+
 /// A folder of `files`, listed, its sequence 7 read at 64 px: the episode's digest.
 fn read_folder(files: &[(String, Vec<u8>)]) -> Result<String, String> {
-    let mut folder = Folder::new(files.iter().map(|f| f.0.clone()).collect()).map_err(message)?;
-    for path in folder.files_of(7, "grasp").map_err(message)? {
+    let mut folder = Folder::new(paths(files)).map_err(message)?;
+    for path in folder.files_of(num(7.0), "grasp".into()).map_err(message)? {
         let (_, bytes) = files.iter().find(|f| f.0 == path).unwrap();
-        folder.put(&path, bytes.clone());
+        folder.put(path.into(), u8s(bytes)).map_err(message)?;
     }
     folder
-        .read(7, "grasp", 64)
+        .read(num(7.0), "grasp".into(), num(64.0))
         .map(|e| e.digest())
         .map_err(message)
 }
@@ -497,8 +597,14 @@ fn folder_reads_a_sequence_as_written_and_reports_the_readers_errors() {
     let ep = grasp7();
     let mut files = folder_files(&ep);
     assert_eq!(read_folder(&files).unwrap(), ep.digest());
-    let folder = Folder::new(files.iter().map(|f| f.0.clone()).collect()).unwrap();
+    let mut folder = Folder::new(paths(&files)).unwrap();
     assert_eq!(folder.root(), "mine");
+    let err = message(
+        folder
+            .put("mine/7/grasp/extra.txt".into(), u8s(b"1"))
+            .unwrap_err(),
+    );
+    assert!(err.contains("path must be a file of this folder"), "{err}");
 
     files[0].1 = b"1 2 3 4 5 6 7\n1 2 x\n".to_vec();
     assert_eq!(
@@ -509,7 +615,7 @@ fn folder_reads_a_sequence_as_written_and_reports_the_readers_errors() {
     assert_eq!(err, "mine/7/grasp/joint_7.txt: no such file");
     let err = read_folder(&files[3..4]).unwrap_err();
     assert!(err.starts_with("mine: no sequences found"), "{err}");
-    let err = Folder::new(vec!["a/0/grasp/x".into(), "b/0/grasp/y".into()])
+    let err = Folder::new(strs(&["a/0/grasp/x", "b/0/grasp/y"]))
         .map(|_| ())
         .map_err(message);
     assert_eq!(
@@ -522,15 +628,19 @@ fn folder_reads_a_sequence_as_written_and_reports_the_readers_errors() {
     let mean: Vec<f32> = (0..7)
         .map(|j| joints.iter().skip(j).step_by(7).sum::<f32>() / ep.steps() as f32)
         .collect();
-    let near = ep.joint_distance(mean.clone(), vec![1.0; 7]).unwrap();
-    let far = ep
-        .joint_distance(mean.iter().map(|m| m + 3.0).collect(), vec![1.0; 7])
-        .unwrap();
+    let ones = f32s(&[1.0; 7]);
+    let near = ep.joint_distance(f32s(&mean), ones.clone()).unwrap();
+    let shifted: Vec<f32> = mean.iter().map(|m| m + 3.0).collect();
+    let far = ep.joint_distance(f32s(&shifted), ones.clone()).unwrap();
     assert!(
         near < far && (far - 9.0 - near).abs() < 1e-3,
         "{near} {far}"
     );
-    assert!(ep.joint_distance(vec![0.0; 6], vec![1.0; 7]).is_err());
+    let err = message(ep.joint_distance(f32s(&[0.0; 6]), ones).unwrap_err());
+    assert!(
+        err.contains("mean must be a Float32Array of 7 values"),
+        "{err}"
+    );
 }
 
 /// `Model.imitate` against the native golden: the same trajectory within 1e-4 and the same
@@ -538,12 +648,12 @@ fn folder_reads_a_sequence_as_written_and_reports_the_readers_errors() {
 #[wasm_bindgen_test]
 fn imitation_matches_native() {
     let golden = golden_imitation::expected();
-    let model = ModelHandle::from_bytes(golden_imitation::MODEL).unwrap();
+    let model = ModelHandle::from_bytes(u8s(golden_imitation::MODEL)).unwrap();
     let action = golden_imitation::ACTION.name();
-    let ep = run_episode(action.into(), golden_imitation::SEED as f64, 64).unwrap();
+    let ep = run_episode(action.into(), num(golden_imitation::SEED as f64), num(64.0)).unwrap();
     for ((task, blend), want) in [("frames", 1.0), ("finish", 0.5)].iter().zip(&golden.tasks) {
         let i = model
-            .imitate(&ep, action.into(), (*task).into(), 5.0, *blend)
+            .imitate(&ep, action.into(), (*task).into(), num(5.0), num(*blend))
             .unwrap()
             .expect("long enough");
         let outcome: serde_json::Value =
@@ -561,10 +671,12 @@ fn imitation_matches_native() {
         assert!(outcome["summary"].as_str().unwrap().len() > 5);
         // The same trajectory performed here is the native performance, bit for bit.
         let object = ep.object();
-        let performed = perform(&want.trajectory, object[0], object[1], 64).unwrap();
+        let (x, y) = (num(object[0].into()), num(object[1].into()));
+        let performed = perform(f32s(&want.trajectory), x, y, num(64.0)).unwrap();
         assert_eq!(performed.digest(), want.performance_digest);
         // And enacted against the demonstration (the page's path), judged as natively.
-        let e = enact(&ep, action.into(), &want.trajectory, &i.observed()).unwrap();
+        let trajectory = f32s(&want.trajectory);
+        let e = enact(&ep, action.into(), trajectory, u32s(&i.observed())).unwrap();
         assert_eq!(e.performance().digest(), want.performance_digest);
         let outcome: serde_json::Value =
             serde_wasm_bindgen::from_value(e.outcome().unwrap()).unwrap();
@@ -579,40 +691,64 @@ fn imitation_matches_native() {
 
 #[wasm_bindgen_test]
 fn bad_imitation_arguments_throw() {
-    let model = ModelHandle::from_bytes(golden_imitation::MODEL).unwrap();
+    let model = ModelHandle::from_bytes(u8s(golden_imitation::MODEL)).unwrap();
     let ep = grasp7();
-    let err = |e: Result<Option<dmbn::web::Imitation>, JsError>| message(e.err().unwrap());
-    assert!(err(model.imitate(&ep, 3.into(), "frames".into(), 5.0, 1.0))
-        .contains("action must be a string"));
-    assert!(err(model.imitate(&ep, "grasp".into(), 3.into(), 5.0, 1.0))
-        .contains("task must be a string"));
+    let imitate = |action: JsValue, task: JsValue, observations: f64, blend: f64| {
+        let imitation = model.imitate(&ep, action, task, num(observations), num(blend));
+        message(imitation.err().unwrap())
+    };
+    let err = imitate(num(3.0), "frames".into(), 5.0, 1.0);
     assert!(
-        err(model.imitate(&ep, "grasp".into(), "interp".into(), 5.0, 1.0))
-            .contains("frames or finish")
+        err.contains(r#"action must be "grasp" or "move", got the number 3"#),
+        "{err}"
+    );
+    let err = imitate("grasp".into(), num(3.0), 5.0, 1.0);
+    assert!(
+        err.contains(r#"task must be "frames" or "finish", got the number 3"#),
+        "{err}"
+    );
+    let err = imitate("grasp".into(), "interp".into(), 5.0, 1.0);
+    assert!(
+        err.contains(r#"task must be "frames" or "finish", got "interp""#),
+        "{err}"
     );
     for k in [1.0, 2.5, -1.0, f64::NAN, f64::INFINITY, 2f64.powi(53)] {
-        assert!(
-            err(model.imitate(&ep, "grasp".into(), "frames".into(), k, 1.0))
-                .contains("observations")
-        );
+        let err = imitate("grasp".into(), "frames".into(), k, 1.0);
+        assert!(err.contains("observations must be an integer"), "{err}");
     }
-    assert!(err(model.imitate(&ep, "grasp".into(), "frames".into(), 5.0, 2.0)).contains("blend"));
-    let bad = |t: &[f32]| message(perform(t, 0.0, 0.5, 64).err().unwrap());
+    let err = imitate("grasp".into(), "frames".into(), 5.0, 2.0);
+    assert!(err.contains("blend must be"), "{err}");
+    let bad = |t: &[f32]| {
+        message(
+            perform(f32s(t), num(0.0), num(0.5), num(64.0))
+                .err()
+                .unwrap(),
+        )
+    };
     assert!(bad(&[0.0; 13]).contains("13 values"));
     assert!(bad(&[]).contains("no rows"));
     assert!(bad(&[f32::NAN; 7]).contains("NaN"));
     assert!(bad(&[9.0; 7]).contains("joint limits"));
     let ok = ep.joints();
-    assert!(message(perform(&ok, 5.0, 0.5, 64).err().unwrap()).contains("placement region"));
-    assert!(message(replay(&ep, "jump".into()).err().unwrap()).contains("unknown action"));
-    let enacted = |t: &[f32], observed: &[u32]| enact(&ep, "grasp".into(), t, observed);
+    let err = message(
+        perform(f32s(&ok), num(5.0), num(0.5), num(64.0))
+            .err()
+            .unwrap(),
+    );
+    assert!(err.starts_with("x must be a number in"), "{err}");
+    let err = message(replay(&ep, "jump".into()).err().unwrap());
+    assert!(
+        err.contains(r#"action must be "grasp" or "move", got "jump""#),
+        "{err}"
+    );
+    let enacted = |t: &[f32], observed: &[u32]| enact(&ep, "grasp".into(), f32s(t), u32s(observed));
     assert!(message(enacted(&ok[..70], &[]).err().unwrap()).contains("rows"));
     assert!(message(enacted(&[f32::NAN; 7], &[]).err().unwrap()).contains("NaN"));
     assert!(message(enacted(&ok, &[0, 9999]).err().unwrap()).contains("observed step 9999"));
     assert!(enacted(&ok, &[0, 10]).unwrap().outcome().is_ok());
     // Still usable afterwards.
     assert!(model
-        .imitate(&ep, "grasp".into(), "frames".into(), 5.0, 1.0)
+        .imitate(&ep, "grasp".into(), "frames".into(), num(5.0), num(1.0))
         .unwrap()
         .is_some());
 }

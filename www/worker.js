@@ -28,7 +28,8 @@
 //   {type: "chunk", id, start, count, mean, sigma, maxSigma, jointMean, jointSigma, ms}
 //   {type: "done", id, ms, encodeMs, encoded, steps}   encoded: the observations encoded
 //   {type: "forgotten", id}
-//   {type: "error", id, message}
+//   {type: "error", id, message}       also the answer to a malformed message (fields checked
+//                                      against FIELDS below); the worker keeps serving
 
 import { EncodedSteps } from "./encoded_steps.js";
 
@@ -47,7 +48,10 @@ const post = (msg, transfer = []) => self.postMessage(msg, transfer);
 
 self.onmessage = async (e) => {
   const msg = e.data;
+  const id = msg?.id;
   try {
+    const problem = malformed(msg);
+    if (problem) throw new Error(`The inference worker got a malformed message: ${problem}.`);
     switch (msg.type) {
       case "init":
         await init(msg.module);
@@ -69,13 +73,55 @@ self.onmessage = async (e) => {
         await forget();
         post({ type: "forgotten", id: msg.id });
         break;
-      default:
-        throw new Error(`unknown message ${JSON.stringify(msg.type)}`);
     }
   } catch (err) {
-    post({ type: "error", id: msg.id, message: err instanceof Error ? err.message : String(err) });
+    post({ type: "error", id, message: err instanceof Error ? err.message : String(err) });
   }
 };
+
+/** A short description of any value, for a message. */
+function describe(value) {
+  if (typeof value === "string") return value.length > 40 ? `a string of ${value.length} characters` : JSON.stringify(value);
+  if (value === null || typeof value !== "object") return String(value);
+  if (Array.isArray(value)) return `an array of ${value.length} items`;
+  return `an object (${value.constructor?.name ?? "no class"})`;
+}
+
+const isString = [(v) => typeof v === "string", "a string"];
+const isIndex = [(v) => Number.isSafeInteger(v) && v >= 0, "a non-negative integer"];
+const optional = ([ok, expected]) => [(v) => v == null || ok(v), `${expected} or absent`];
+const typed = (Type) => [(v) => v instanceof Type, `a ${Type.name}`];
+/** Each message type's fields and what they must be (as the page sends them; see the top). */
+const FIELDS = {
+  init: { module: [(v) => v instanceof WebAssembly.Module, "a WebAssembly.Module"] },
+  load: { model: isString, url: isString },
+  predict: {
+    model: isString,
+    frames: typed(Uint8Array),
+    joints: typed(Float32Array),
+    times: typed(Float32Array),
+    targets: typed(Float32Array),
+    blend: [(v) => typeof v === "number" && v >= 0 && v <= 1, "a number in [0, 1]"],
+    chunk: [(v) => Number.isSafeInteger(v) && v >= 1, "a positive integer"],
+    delay: optional([(v) => typeof v === "number" && v >= 0 && v < 60_000, "a delay in ms"]),
+    source: optional([(v) => typeof v === "string" || Number.isFinite(v), "a string or number"]),
+    steps: optional([(v) => Array.isArray(v) && v.every(isIndex[0]), "an array of step indices"]),
+    firstAlone: optional([(v) => typeof v === "boolean", "a boolean"]),
+  },
+  cancel: { target: isIndex },
+  forget: {},
+};
+
+/** Why `msg` is not a message this worker takes (each field it reads checked), or null. */
+function malformed(msg) {
+  if (msg === null || typeof msg !== "object") return `expected an object, got ${describe(msg)}`;
+  const fields = Object.hasOwn(FIELDS, msg.type) ? FIELDS[msg.type] : null;
+  if (!fields) return `unknown type ${describe(msg.type)}: expected ${Object.keys(FIELDS).join(", ")}`;
+  for (const [field, [ok, expected]] of Object.entries(fields)) {
+    if (!ok(msg[field])) return `${msg.type}: ${field} must be ${expected}, got ${describe(msg[field])}`;
+  }
+  return null;
+}
 
 async function init(module) {
   try {

@@ -23,6 +23,11 @@ pub struct TimeWarpConfig {
     pub freeze_probability: f64,
     /// Extra copies of the frozen step, drawn uniformly from this range (inclusive).
     pub freeze_length: [usize; 2],
+    /// If set, the freeze's length is instead drawn as a fraction of the warped sequence
+    /// (uniformly from this range, below 1): the paper's freezes "of any length", up to most
+    /// of the action, which a count of copies cannot express for sequences of any length.
+    #[serde(default)]
+    pub freeze_fraction: Option<[f64; 2]>,
 }
 
 impl Default for TimeWarpConfig {
@@ -34,6 +39,7 @@ impl Default for TimeWarpConfig {
             speed: [0.5, 2.0],
             freeze_probability: 0.5,
             freeze_length: [3, 15],
+            freeze_fraction: None,
         }
     }
 }
@@ -64,6 +70,12 @@ impl TimeWarpConfig {
             if !(lo.is_finite() && hi.is_finite() && min <= lo && lo <= hi) {
                 let expected = format!("finite bounds, {min} <= low <= high");
                 return Err(bad(field, format!("[{lo}, {hi}]"), &expected));
+            }
+        }
+        if let Some([lo, hi]) = self.freeze_fraction {
+            if !(0.0..1.0).contains(&lo) || !(lo..1.0).contains(&hi) {
+                let expected = "0 <= low <= high < 1 (a fraction of the warped sequence)";
+                return Err(bad("freeze_fraction", format!("[{lo}, {hi}]"), expected));
             }
         }
         let [a, b] = self.section_fraction;
@@ -104,7 +116,14 @@ impl TimeWarpConfig {
         indices.push(len - 1);
         if rng.random_bool(self.freeze_probability) {
             let at = rng.random_range(0..indices.len());
-            let copies = rng.random_range(self.freeze_length[0]..=self.freeze_length[1]);
+            let copies = match self.freeze_fraction {
+                // A freeze of `copies` extra steps covers copies / (n + copies) of the result.
+                Some([lo, hi]) => {
+                    let fraction = rng.random_range(lo..=hi);
+                    (fraction / (1.0 - fraction) * indices.len() as f64).round() as usize
+                }
+                None => rng.random_range(self.freeze_length[0]..=self.freeze_length[1]),
+            };
             let step = indices[at];
             indices.splice(at..at, std::iter::repeat_n(step, copies));
         }

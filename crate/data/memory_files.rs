@@ -32,6 +32,11 @@ impl MemoryFiles {
         self.files.insert(clean(path), Some(bytes));
     }
 
+    /// True when `path` is one of the tree's files.
+    pub fn contains(&self, path: &str) -> bool {
+        self.files.contains_key(&clean(path))
+    }
+
     /// Drops every file's bytes (the tree stays): after a sequence has been read.
     pub fn release(&mut self) {
         self.files.values_mut().for_each(|b| *b = None);

@@ -1,5 +1,7 @@
 use wasm_bindgen::prelude::*;
 
+use super::argument;
+
 use crate::model::EncodedContexts;
 
 /// Observations encoded one by one by `Model.encodeContexts`, not yet aggregated, with the
@@ -42,8 +44,11 @@ impl Contexts {
 
     /// A new set of the observations at `indices` (a `Uint32Array`, in that order). Throws on
     /// no index or one past the set.
-    pub fn select(&self, indices: Vec<u32>) -> Result<Contexts, JsError> {
-        let indices: Vec<usize> = indices.into_iter().map(|i| i as usize).collect();
+    pub fn select(
+        &self,
+        #[wasm_bindgen(unchecked_param_type = "Uint32Array")] indices: JsValue,
+    ) -> Result<Contexts, JsError> {
+        let indices = argument::indices(&indices, "indices")?;
         Ok(Contexts {
             inner: self.inner.select(&indices)?,
             model: self.model,

@@ -1,5 +1,6 @@
 use wasm_bindgen::prelude::*;
 
+use super::argument::{self, floats, index};
 use super::Simulator;
 use crate::data::{Normalization, Sequence, JOINTS};
 
@@ -62,7 +63,11 @@ impl Episode {
     }
 
     /// Frame `k` as a `Uint8Array(imageSize² × 3)`; throws when `k` is not a step index.
-    pub fn frame(&self, k: usize) -> Result<Vec<u8>, JsError> {
+    pub fn frame(
+        &self,
+        #[wasm_bindgen(unchecked_param_type = "number")] k: JsValue,
+    ) -> Result<Vec<u8>, JsError> {
+        let k = index(&k, "k")?;
         if k < self.inner.len() {
             Ok(self.inner.frame(k).to_vec())
         } else {
@@ -77,13 +82,17 @@ impl Episode {
     /// `mean` and `std`): the mean squared normalised joint value. The page offers the models
     /// whose normalisation a folder's sequence fits best. Throws unless both have 7 values.
     #[wasm_bindgen(js_name = jointDistance)]
-    pub fn joint_distance(&self, mean: Vec<f32>, std: Vec<f32>) -> Result<f64, JsError> {
-        let (Ok(mean), Ok(std)) = (
-            <[f32; JOINTS]>::try_from(mean),
-            <[f32; JOINTS]>::try_from(std),
-        ) else {
-            return Err(JsError::new("expected 7 means and 7 standard deviations"));
+    pub fn joint_distance(
+        &self,
+        #[wasm_bindgen(unchecked_param_type = "Float32Array")] mean: JsValue,
+        #[wasm_bindgen(unchecked_param_type = "Float32Array")] std: JsValue,
+    ) -> Result<f64, JsError> {
+        let seven = |value: &JsValue, name| {
+            let values = floats(value, name)?;
+            <[f32; JOINTS]>::try_from(values.as_slice())
+                .map_err(|_| argument::wrong(name, "a Float32Array of 7 values", value))
         };
+        let (mean, std) = (seven(&mean, "mean")?, seven(&std, "std")?);
         Ok(Normalization { mean, std }.distance(&self.inner.joints))
     }
 
@@ -97,8 +106,8 @@ impl Episode {
 #[wasm_bindgen(js_name = runEpisode)]
 pub fn run_episode(
     #[wasm_bindgen(unchecked_param_type = "string")] action: JsValue,
-    seed: f64,
-    #[wasm_bindgen(js_name = imageSize)] image_size: u32,
+    #[wasm_bindgen(unchecked_param_type = "number")] seed: JsValue,
+    #[wasm_bindgen(js_name = imageSize, unchecked_param_type = "number")] size: JsValue,
 ) -> Result<Episode, JsError> {
-    Ok(Simulator::new(action, seed, image_size)?.run())
+    Ok(Simulator::new(action, seed, size)?.run())
 }

@@ -2,9 +2,9 @@ use rand::SeedableRng;
 use rand_pcg::Pcg64;
 use wasm_bindgen::prelude::*;
 
-use super::seed::parse_seed;
+use super::argument::{choice, optional_index, seed};
 use super::Episode;
-use crate::augment::{AugmentError, EvalMode, EvalSequence};
+use crate::augment::{EvalMode, EvalSequence};
 
 /// One of the paper's evaluation sequences of an episode (t, p or f), with explicit time
 /// stamps: what the page shows the model.
@@ -45,15 +45,17 @@ impl Episode {
     #[wasm_bindgen(js_name = evalSequence)]
     pub fn eval_sequence(
         &self,
-        mode: &str,
-        seed: f64,
-        #[wasm_bindgen(js_name = freezeFrom)] freeze_from: Option<usize>,
-        #[wasm_bindgen(js_name = freezeTo)] freeze_to: Option<usize>,
+        #[wasm_bindgen(unchecked_param_type = "string")] mode: JsValue,
+        #[wasm_bindgen(js_name = seed, unchecked_param_type = "number")] seed_value: JsValue,
+        #[wasm_bindgen(js_name = freezeFrom, unchecked_param_type = "number | undefined")]
+        freeze_from: JsValue,
+        #[wasm_bindgen(js_name = freezeTo, unchecked_param_type = "number | undefined")]
+        freeze_to: JsValue,
     ) -> Result<EvalEpisode, JsError> {
-        let mode: EvalMode = mode
-            .parse()
-            .map_err(|e: AugmentError| JsError::new(&e.to_string()))?;
-        let mut rng = Pcg64::seed_from_u64(parse_seed(seed)?);
+        let mode: EvalMode = choice(&mode, "mode", "\"t\", \"p\" or \"f\"")?;
+        let mut rng = Pcg64::seed_from_u64(seed(&seed_value)?);
+        let freeze_from = optional_index(&freeze_from, "freezeFrom")?;
+        let freeze_to = optional_index(&freeze_to, "freezeTo")?;
         let freeze = freeze_from.map(|from| (from, freeze_to.unwrap_or(self.sequence().len())));
         Ok(EvalEpisode {
             inner: EvalSequence::build(mode, self.sequence(), freeze, &mut rng),

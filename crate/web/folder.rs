@@ -3,8 +3,9 @@ use std::path::{Component, Path};
 use serde::Serialize;
 use wasm_bindgen::prelude::*;
 
+use super::argument::{bytes, image_size, integer, string, strings, wrong};
 use super::Episode;
-use crate::data::{read_sequence_from, Dataset, MemoryFiles};
+use crate::data::{read_sequence_from, Dataset, MemoryFiles, SequenceRef};
 
 /// A folder in the DMBN layout that the user opened in the page: listed and read by the native
 /// reader's code ([`Dataset::list`], [`read_sequence_from`]) on the files the browser hands
@@ -30,11 +31,15 @@ impl Folder {
     /// all under one folder). Throws the reader's error: no sequence folders, an id folder
     /// without actions.
     #[wasm_bindgen(constructor)]
-    pub fn new(paths: Vec<String>) -> Result<Folder, JsError> {
-        let files = MemoryFiles::new(&paths);
-        let mut roots = paths.iter().filter_map(|p| first_part(p));
+    pub fn new(
+        #[wasm_bindgen(unchecked_param_type = "string[]")] paths: JsValue,
+    ) -> Result<Folder, JsError> {
+        let names = strings(&paths, "paths")?;
+        let files = MemoryFiles::new(&names);
+        let mut roots = names.iter().filter_map(|p| first_part(p));
         let Some(root) = roots.next() else {
-            return Err(JsError::new("the folder holds no file"));
+            let expected = "the relative paths of the folder's files (the folder holds none)";
+            return Err(wrong("paths", expected, &paths));
         };
         if let Some(other) = roots.find(|r| *r != root) {
             return Err(JsError::new(&format!(
@@ -68,8 +73,12 @@ impl Folder {
     /// Paths of the files sequence `id`/`action` is read from: hand their bytes over with
     /// `put` before `read`. Throws when the folder has no such sequence.
     #[wasm_bindgen(js_name = filesOf)]
-    pub fn files_of(&self, id: u32, action: &str) -> Result<Vec<String>, JsError> {
-        let dir = &self.dataset.find(id, action)?.dir;
+    pub fn files_of(
+        &self,
+        #[wasm_bindgen(unchecked_param_type = "number")] id: JsValue,
+        #[wasm_bindgen(unchecked_param_type = "string")] action: JsValue,
+    ) -> Result<Vec<String>, JsError> {
+        let dir = &self.sequence(&id, &action)?.dir;
         let names = crate::data::Files::files(&self.files, dir)?;
         Ok(names
             .iter()
@@ -77,9 +86,23 @@ impl Folder {
             .collect())
     }
 
-    /// Hands over the bytes of the file at `path` (one of `filesOf`).
-    pub fn put(&mut self, path: &str, bytes: Vec<u8>) {
-        self.files.put(path, bytes);
+    /// Hands over the bytes of the file at `path` (one of `filesOf`). Throws for a path that
+    /// is not one of the folder's files.
+    pub fn put(
+        &mut self,
+        #[wasm_bindgen(unchecked_param_type = "string")] path: JsValue,
+        #[wasm_bindgen(js_name = bytes, unchecked_param_type = "Uint8Array")] content: JsValue,
+    ) -> Result<(), JsError> {
+        let name = string(&path, "path")?;
+        if !self.files.contains(&name) {
+            return Err(wrong(
+                "path",
+                "a file of this folder (one of filesOf's)",
+                &path,
+            ));
+        }
+        self.files.put(&name, bytes(&content, "bytes")?);
+        Ok(())
     }
 
     /// Reads and validates sequence `id`/`action` from the bytes handed over, frames resized to
@@ -87,16 +110,31 @@ impl Folder {
     /// reader's error (a missing joint file, a malformed row, too few frames, not an image).
     pub fn read(
         &mut self,
-        id: u32,
-        action: &str,
-        #[wasm_bindgen(js_name = imageSize)] image_size: u32,
+        #[wasm_bindgen(unchecked_param_type = "number")] id: JsValue,
+        #[wasm_bindgen(unchecked_param_type = "string")] action: JsValue,
+        #[wasm_bindgen(js_name = imageSize, unchecked_param_type = "number")] size: JsValue,
     ) -> Result<Episode, JsError> {
-        let result = self
-            .dataset
-            .find(id, action)
-            .and_then(|s| read_sequence_from(&self.files, &s.dir, id, Some(image_size)));
+        let size = image_size(&size)?;
+        let result = self.sequence(&id, &action).and_then(|s| {
+            read_sequence_from(&self.files, &s.dir, s.id, Some(size)).map_err(JsError::from)
+        });
         self.files.release();
         Ok(result?.into())
+    }
+}
+
+impl Folder {
+    /// The sequence `id`/`action` of the folder, from JS arguments: an integer id and one of
+    /// the folder's actions (checked first, so a wrong one is named, not quoted at length).
+    fn sequence(&self, id: &JsValue, action: &JsValue) -> Result<&SequenceRef, JsError> {
+        let id = integer(id, "id", 0, u64::from(u32::MAX))? as u32;
+        let name = string(action, "action")?;
+        let actions = self.dataset.actions();
+        if !actions.contains(&name) {
+            let expected = format!("one of the folder's actions ({})", actions.join(", "));
+            return Err(wrong("action", &expected, action));
+        }
+        Ok(self.dataset.find(id, &name)?)
     }
 }
 

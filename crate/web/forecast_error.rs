@@ -1,5 +1,6 @@
 use wasm_bindgen::prelude::*;
 
+use super::argument::{bytes, floats};
 use crate::quality;
 
 /// The quality benchmark's measures of a forecast the page drew (RGB bytes and joints for a
@@ -8,12 +9,18 @@ use crate::quality;
 /// `object_iou`, …); throws, naming the argument, when the layouts disagree.
 #[wasm_bindgen(js_name = forecastError)]
 pub fn forecast_error(
-    #[wasm_bindgen(js_name = trueFrames)] true_frames: &[u8],
-    #[wasm_bindgen(js_name = trueJoints)] true_joints: &[f32],
-    frames: &[u8],
-    joints: &[f32],
+    #[wasm_bindgen(js_name = trueFrames, unchecked_param_type = "Uint8Array")] true_frames: JsValue,
+    #[wasm_bindgen(js_name = trueJoints, unchecked_param_type = "Float32Array")]
+    true_joints: JsValue,
+    #[wasm_bindgen(unchecked_param_type = "Uint8Array")] frames: JsValue,
+    #[wasm_bindgen(unchecked_param_type = "Float32Array")] joints: JsValue,
 ) -> Result<JsValue, JsError> {
-    let quality = quality::score_steps(true_frames, true_joints, frames, joints)
+    let (true_frames, true_joints) = (
+        bytes(&true_frames, "trueFrames")?,
+        floats(&true_joints, "trueJoints")?,
+    );
+    let (frames, joints) = (bytes(&frames, "frames")?, floats(&joints, "joints")?);
+    let quality = quality::score_steps(&true_frames, &true_joints, &frames, &joints)
         .map_err(|e| JsError::new(&format!("forecastError: {e}")))?;
     serde::Serialize::serialize(&quality, &serde_wasm_bindgen::Serializer::json_compatible())
         .map_err(|e| JsError::new(&e.to_string()))

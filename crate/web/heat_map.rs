@@ -1,5 +1,6 @@
 use wasm_bindgen::prelude::*;
 
+use super::argument::{floats, number};
 use crate::predict;
 
 /// Pixel σ (a `Float32Array(S × S)`, as `Prediction.pixelSigma` gives it) as an RGB heat map,
@@ -7,6 +8,11 @@ use crate::predict;
 /// full yellow: the ramp and the scaling of `sigmaMap` and of the σ images `dmbn predict`
 /// writes.
 #[wasm_bindgen(js_name = heatMap)]
-pub fn heat_map(sigma: &[f32], scale: f32) -> Vec<u8> {
-    predict::heat_map(sigma, scale)
+pub fn heat_map(
+    #[wasm_bindgen(unchecked_param_type = "Float32Array")] sigma: JsValue,
+    #[wasm_bindgen(unchecked_param_type = "number")] scale: JsValue,
+) -> Result<Vec<u8>, JsError> {
+    let sigma = floats(&sigma, "sigma")?;
+    let scale = number(&scale, "scale", 0.0, f64::MAX)? as f32;
+    Ok(predict::heat_map(&sigma, scale))
 }

@@ -1,9 +1,9 @@
 use serde::Serialize;
 use wasm_bindgen::prelude::*;
 
-use super::action::parse_action;
+use super::argument::{action, floats, image_size, indices, position};
 use super::Episode;
-use crate::imitate::{self, Task};
+use crate::imitate;
 use crate::sim::{self, Outcome, Trajectory};
 
 /// A performance of a demonstration's action (`Model.imitate`, `replay`): the trajectory the
@@ -83,9 +83,9 @@ impl Imitation {
 #[wasm_bindgen]
 pub fn replay(
     episode: &Episode,
-    #[wasm_bindgen(unchecked_param_type = "string")] action: JsValue,
+    #[wasm_bindgen(js_name = action, unchecked_param_type = "string")] action_value: JsValue,
 ) -> Result<Imitation, JsError> {
-    let action = parse_action(&action)?;
+    let action = action(&action_value)?;
     Ok(imitate::replay(episode.sequence(), action)?.into())
 }
 
@@ -97,14 +97,15 @@ pub fn replay(
 #[wasm_bindgen]
 pub fn enact(
     episode: &Episode,
-    #[wasm_bindgen(unchecked_param_type = "string")] action: JsValue,
-    trajectory: &[f32],
-    observed: &[u32],
+    #[wasm_bindgen(js_name = action, unchecked_param_type = "string")] action_value: JsValue,
+    #[wasm_bindgen(unchecked_param_type = "Float32Array")] trajectory: JsValue,
+    #[wasm_bindgen(unchecked_param_type = "Uint32Array")] observed: JsValue,
 ) -> Result<Imitation, JsError> {
-    let action = parse_action(&action)?;
+    let action = action(&action_value)?;
     let demo = episode.sequence();
-    let rows = Trajectory::from_flat(trajectory)?.rows().to_vec();
-    let observed: Vec<usize> = observed.iter().map(|&k| k as usize).collect();
+    let trajectory = floats(&trajectory, "trajectory")?;
+    let rows = Trajectory::from_flat(&trajectory)?.rows().to_vec();
+    let observed = indices(&observed, "observed")?;
     if let Some(k) = observed.iter().find(|&&k| k >= demo.len()) {
         return Err(JsError::new(&format!(
             "observed step {k} is past the demonstration's {} steps",
@@ -120,32 +121,13 @@ pub fn enact(
 /// not a multiple of 7, NaN, an angle beyond ±2π, no row or over 2000) or placement.
 #[wasm_bindgen]
 pub fn perform(
-    trajectory: &[f32],
-    x: f32,
-    y: f32,
-    #[wasm_bindgen(js_name = imageSize)] image_size: u32,
+    #[wasm_bindgen(unchecked_param_type = "Float32Array")] trajectory: JsValue,
+    #[wasm_bindgen(unchecked_param_type = "number")] x: JsValue,
+    #[wasm_bindgen(unchecked_param_type = "number")] y: JsValue,
+    #[wasm_bindgen(js_name = imageSize, unchecked_param_type = "number")] size: JsValue,
 ) -> Result<Episode, JsError> {
-    let trajectory = Trajectory::from_flat(trajectory)?;
-    Ok(sim::perform(&trajectory, [x, y], image_size)?.into())
-}
-
-/// A JS value as a task name.
-pub(crate) fn parse_task(value: &JsValue) -> Result<Task, JsError> {
-    match value.as_string() {
-        Some(name) => name.parse().map_err(|e: String| JsError::new(&e)),
-        None => Err(JsError::new(&format!(
-            "task must be a string (\"frames\" or \"finish\"), got {value:?}"
-        ))),
-    }
-}
-
-/// A JS number as a count of observations: an integer from 2 to 10,000.
-pub(crate) fn parse_observations(value: f64) -> Result<usize, JsError> {
-    if value.is_finite() && value.fract() == 0.0 && (2.0..=10_000.0).contains(&value) {
-        Ok(value as usize)
-    } else {
-        Err(JsError::new(&format!(
-            "observations is {value}: expected an integer from 2 to 10000"
-        )))
-    }
+    let trajectory = floats(&trajectory, "trajectory")?;
+    let trajectory = Trajectory::from_flat(&trajectory)?;
+    let position = position(&x, &y)?;
+    Ok(sim::perform(&trajectory, position, image_size(&size)?)?.into())
 }

@@ -1,6 +1,6 @@
 //! JavaScript bindings (wasm32 only): thin wrappers that convert JS values to the Rust types of
 //! [`crate::sim`] and [`crate::predict`] and back. No simulation logic lives here; bad arguments become JS exceptions.
-mod action;
+mod argument;
 mod contexts;
 mod encoding;
 mod episode;
@@ -11,7 +11,6 @@ mod heat_map;
 mod imitation;
 mod model;
 mod region;
-mod seed;
 mod simulator;
 
 pub use contexts::Contexts;

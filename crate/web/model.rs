@@ -4,12 +4,12 @@ use wasm_bindgen::prelude::*;
 
 use serde::Serialize;
 
-use super::action::parse_action;
+use super::argument::{self, action, blend, bytes, choice, floats, index, observations};
 use super::contexts::Contexts;
 use super::encoding::Encoding;
-use super::imitation::{parse_observations, parse_task, Imitation};
+use super::imitation::Imitation;
 use super::Episode;
-use crate::imitate;
+use crate::imitate::{self, Task};
 use crate::predict::{Observations, Predictor, SequencePrediction};
 use crate::quality::{score_sequence, Quality, Scenario};
 
@@ -32,9 +32,11 @@ pub struct ModelHandle {
 impl ModelHandle {
     /// Reads a model file (`Uint8Array`); throws on a truncated, corrupt or foreign file.
     #[wasm_bindgen(js_name = fromBytes)]
-    pub fn from_bytes(bytes: &[u8]) -> Result<ModelHandle, JsError> {
+    pub fn from_bytes(
+        #[wasm_bindgen(js_name = bytes, unchecked_param_type = "Uint8Array")] file: JsValue,
+    ) -> Result<ModelHandle, JsError> {
         Ok(ModelHandle {
-            inner: Predictor::from_bytes(bytes)?,
+            inner: Predictor::from_bytes(&bytes(&file, "bytes")?)?,
             id: NEXT_ID.fetch_add(1, Ordering::Relaxed),
         })
     }
@@ -65,13 +67,16 @@ impl ModelHandle {
     /// 0 = joints only). Throws on bad input.
     pub fn predict(
         &self,
-        frames: Vec<u8>,
-        joints: Vec<f32>,
-        times: Vec<f32>,
-        #[wasm_bindgen(js_name = targetTimes)] target_times: Vec<f32>,
-        blend: f32,
+        #[wasm_bindgen(unchecked_param_type = "Uint8Array")] frames: JsValue,
+        #[wasm_bindgen(unchecked_param_type = "Float32Array")] joints: JsValue,
+        #[wasm_bindgen(unchecked_param_type = "Float32Array")] times: JsValue,
+        #[wasm_bindgen(js_name = targetTimes, unchecked_param_type = "Float32Array")]
+        target_times: JsValue,
+        #[wasm_bindgen(js_name = blend, unchecked_param_type = "number")] blend_value: JsValue,
     ) -> Result<Prediction, JsError> {
-        let observations = self.observations(frames, joints, times);
+        let observations = self.observations(&frames, &joints, &times)?;
+        let target_times = floats(&target_times, "targetTimes")?;
+        let blend = blend(&blend_value)?;
         Ok(Prediction {
             inner: self.inner.predict(&observations, &target_times, blend)?,
         })
@@ -81,12 +86,13 @@ impl ModelHandle {
     /// for `decode`. Throws on bad input.
     pub fn encode(
         &self,
-        frames: Vec<u8>,
-        joints: Vec<f32>,
-        times: Vec<f32>,
-        blend: f32,
+        #[wasm_bindgen(unchecked_param_type = "Uint8Array")] frames: JsValue,
+        #[wasm_bindgen(unchecked_param_type = "Float32Array")] joints: JsValue,
+        #[wasm_bindgen(unchecked_param_type = "Float32Array")] times: JsValue,
+        #[wasm_bindgen(js_name = blend, unchecked_param_type = "number")] blend_value: JsValue,
     ) -> Result<Encoding, JsError> {
-        let observations = self.observations(frames, joints, times);
+        let observations = self.observations(&frames, &joints, &times)?;
+        let blend = blend(&blend_value)?;
         Ok(Encoding {
             inner: self.inner.encode(&observations, blend)?,
             model: self.id,
@@ -98,11 +104,11 @@ impl ModelHandle {
     #[wasm_bindgen(js_name = encodeContexts)]
     pub fn encode_contexts(
         &self,
-        frames: Vec<u8>,
-        joints: Vec<f32>,
-        times: Vec<f32>,
+        #[wasm_bindgen(unchecked_param_type = "Uint8Array")] frames: JsValue,
+        #[wasm_bindgen(unchecked_param_type = "Float32Array")] joints: JsValue,
+        #[wasm_bindgen(unchecked_param_type = "Float32Array")] times: JsValue,
     ) -> Result<Contexts, JsError> {
-        let observations = self.observations(frames, joints, times);
+        let observations = self.observations(&frames, &joints, &times)?;
         Ok(Contexts {
             inner: self.inner.encode_contexts(&observations)?,
             model: self.id,
@@ -112,7 +118,12 @@ impl ModelHandle {
     /// The `Encoding` of encoded `contexts` with `blend` in [0, 1], for `decode`: what `encode`
     /// gives for the same observations. Throws when `contexts` come from another model or the
     /// blend is out of range.
-    pub fn represent(&self, contexts: &Contexts, blend: f32) -> Result<Encoding, JsError> {
+    pub fn represent(
+        &self,
+        contexts: &Contexts,
+        #[wasm_bindgen(js_name = blend, unchecked_param_type = "number")] blend_value: JsValue,
+    ) -> Result<Encoding, JsError> {
+        let blend = blend(&blend_value)?;
         if contexts.model != self.id {
             return Err(JsError::new(
                 "these contexts were encoded by another model: encode the observations with this one",
@@ -130,8 +141,10 @@ impl ModelHandle {
     pub fn decode(
         &self,
         encoding: &Encoding,
-        #[wasm_bindgen(js_name = targetTimes)] target_times: Vec<f32>,
+        #[wasm_bindgen(js_name = targetTimes, unchecked_param_type = "Float32Array")]
+        target_times: JsValue,
     ) -> Result<Prediction, JsError> {
+        let target_times = floats(&target_times, "targetTimes")?;
         if encoding.model != self.id {
             return Err(JsError::new(
                 "this encoding was made by another model: encode the observations with this one",
@@ -151,11 +164,12 @@ impl ModelHandle {
     pub fn score(
         &self,
         episode: &Episode,
-        scenario: &str,
-        observations: usize,
-        blend: f32,
+        #[wasm_bindgen(unchecked_param_type = "string")] scenario: JsValue,
+        #[wasm_bindgen(js_name = observations, unchecked_param_type = "number")] count: JsValue,
+        #[wasm_bindgen(js_name = blend, unchecked_param_type = "number")] blend_value: JsValue,
     ) -> Result<JsValue, JsError> {
-        let scenario: Scenario = scenario.parse().map_err(|e: String| JsError::new(&e))?;
+        let scenario: Scenario = choice(&scenario, "scenario", "\"interp\" or \"extrap\"")?;
+        let (observations, blend) = (observations(&count)?, blend(&blend_value)?);
         let scores = score_sequence(
             &self.inner,
             episode.sequence(),
@@ -189,14 +203,14 @@ impl ModelHandle {
     pub fn imitate(
         &self,
         episode: &Episode,
-        #[wasm_bindgen(unchecked_param_type = "string")] action: JsValue,
+        #[wasm_bindgen(js_name = action, unchecked_param_type = "string")] action_value: JsValue,
         #[wasm_bindgen(unchecked_param_type = "string")] task: JsValue,
-        observations: f64,
-        blend: f32,
+        #[wasm_bindgen(js_name = observations, unchecked_param_type = "number")] count: JsValue,
+        #[wasm_bindgen(js_name = blend, unchecked_param_type = "number")] blend_value: JsValue,
     ) -> Result<Option<Imitation>, JsError> {
-        let action = parse_action(&action)?;
-        let task = parse_task(&task)?;
-        let observations = parse_observations(observations)?;
+        let action = action(&action_value)?;
+        let task: Task = choice(&task, "task", "\"frames\" or \"finish\"")?;
+        let (observations, blend) = (observations(&count)?, blend(&blend_value)?);
         let imitation = imitate::imitate(
             &self.inner,
             episode.sequence(),
@@ -217,13 +231,19 @@ struct ScoreValue {
 }
 
 impl ModelHandle {
-    fn observations(&self, frames: Vec<u8>, joints: Vec<f32>, times: Vec<f32>) -> Observations {
-        Observations {
+    /// The observations of `predict`, `encode` and `encodeContexts` from their JS arguments.
+    fn observations(
+        &self,
+        frames: &JsValue,
+        joints: &JsValue,
+        times: &JsValue,
+    ) -> Result<Observations, JsError> {
+        Ok(Observations {
             image_size: self.image_size(),
-            frames,
-            joints,
-            times,
-        }
+            frames: bytes(frames, "frames")?,
+            joints: floats(joints, "joints")?,
+            times: floats(times, "times")?,
+        })
     }
 }
 
@@ -240,9 +260,11 @@ impl Prediction {
         &self.inner
     }
 
-    fn check(&self, k: usize) -> Result<(), JsError> {
+    /// `k` as a target index of this prediction.
+    fn check(&self, k: &JsValue) -> Result<usize, JsError> {
+        let k = index(k, "k")?;
         if k < self.inner.len() {
-            Ok(())
+            Ok(k)
         } else {
             Err(JsError::new(&format!(
                 "target index {k} is out of range: the prediction has {} targets",
@@ -299,16 +321,24 @@ impl Prediction {
 
     /// Mean frame `k` as RGB bytes, `Uint8Array(S × S × 3)`.
     #[wasm_bindgen(js_name = meanFrame)]
-    pub fn mean_frame(&self, k: usize) -> Result<Vec<u8>, JsError> {
-        self.check(k)?;
+    pub fn mean_frame(
+        &self,
+        #[wasm_bindgen(unchecked_param_type = "number")] k: JsValue,
+    ) -> Result<Vec<u8>, JsError> {
+        let k = self.check(&k)?;
         Ok(self.inner.mean_frame(k))
     }
 
     /// σ of frame `k` as an RGB heat map, `Uint8Array(S × S × 3)`; `scale` is the σ shown as
     /// full yellow (pass `maxImageSigma` to compare frames).
     #[wasm_bindgen(js_name = sigmaMap)]
-    pub fn sigma_map(&self, k: usize, scale: f32) -> Result<Vec<u8>, JsError> {
-        self.check(k)?;
+    pub fn sigma_map(
+        &self,
+        #[wasm_bindgen(unchecked_param_type = "number")] k: JsValue,
+        #[wasm_bindgen(unchecked_param_type = "number")] scale: JsValue,
+    ) -> Result<Vec<u8>, JsError> {
+        let k = self.check(&k)?;
+        let scale = argument::number(&scale, "scale", 0.0, f64::MAX)? as f32;
         Ok(self.inner.sigma_map(k, scale))
     }
 

@@ -1,6 +1,7 @@
 use wasm_bindgen::prelude::*;
 
-use super::{action::parse_action, seed::parse_seed, Episode};
+use super::argument::{action, image_size, position, seed};
+use super::Episode;
 use crate::sim;
 
 /// A running episode that JS advances one step at a time (for live animation), reading the
@@ -16,12 +17,16 @@ impl Simulator {
     /// the object, `imageSize` is 64 or 128.
     #[wasm_bindgen(constructor)]
     pub fn new(
-        #[wasm_bindgen(unchecked_param_type = "string")] action: JsValue,
-        seed: f64,
-        #[wasm_bindgen(js_name = imageSize)] image_size: u32,
+        #[wasm_bindgen(js_name = action, unchecked_param_type = "string")] action_value: JsValue,
+        #[wasm_bindgen(js_name = seed, unchecked_param_type = "number")] seed_value: JsValue,
+        #[wasm_bindgen(js_name = imageSize, unchecked_param_type = "number")] size: JsValue,
     ) -> Result<Simulator, JsError> {
-        let action = parse_action(&action)?;
-        let inner = sim::Simulator::new(action, parse_seed(seed)?, image_size)?;
+        let (action, seed, size) = (
+            action(&action_value)?,
+            seed(&seed_value)?,
+            image_size(&size)?,
+        );
+        let inner = sim::Simulator::new(action, seed, size)?;
         Ok(Simulator { inner })
     }
 
@@ -29,14 +34,16 @@ impl Simulator {
     /// which must lie in `placementRegion()`.
     #[wasm_bindgen(js_name = withObject)]
     pub fn with_object(
-        #[wasm_bindgen(unchecked_param_type = "string")] action: JsValue,
-        x: f32,
-        y: f32,
-        seed: f64,
-        #[wasm_bindgen(js_name = imageSize)] image_size: u32,
+        #[wasm_bindgen(js_name = action, unchecked_param_type = "string")] action_value: JsValue,
+        #[wasm_bindgen(unchecked_param_type = "number")] x: JsValue,
+        #[wasm_bindgen(unchecked_param_type = "number")] y: JsValue,
+        #[wasm_bindgen(js_name = seed, unchecked_param_type = "number")] seed_value: JsValue,
+        #[wasm_bindgen(js_name = imageSize, unchecked_param_type = "number")] size: JsValue,
     ) -> Result<Simulator, JsError> {
-        let action = parse_action(&action)?;
-        let inner = sim::Simulator::with_object(action, x, y, parse_seed(seed)?, image_size)?;
+        let action = action(&action_value)?;
+        let [x, y] = position(&x, &y)?;
+        let (seed, size) = (seed(&seed_value)?, image_size(&size)?);
+        let inner = sim::Simulator::with_object(action, x, y, seed, size)?;
         Ok(Simulator { inner })
     }
 

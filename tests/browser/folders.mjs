@@ -2,7 +2,7 @@
 // simulator (so they need nothing but pkg/): frames as PNG, the text files as `dmbn simulate`
 // writes them, and broken variants of them.
 import { mkdirSync, rmSync, unlinkSync, writeFileSync } from "node:fs";
-import { join } from "node:path";
+import { dirname, join } from "node:path";
 import { deflateSync } from "node:zlib";
 
 const CRC_TABLE = Array.from({ length: 256 }, (_, n) => {
@@ -42,25 +42,39 @@ const table = (values, width) =>
   Array.from({ length: values.length / width }, (_, k) => Array.from(values.subarray(k * width, (k + 1) * width), number).join(" ") + "\n").join("");
 
 /**
+ * The files of the episodes `[{action, seed}]` of the wasm package `wasm` at `size` px as
+ * sequences 0, 1, … of a folder named `root`: `{files: {path: bytes}, digests: {"id/action": digest}}`.
+ */
+export function folderFiles(wasm, root, episodes, size = 64) {
+  const files = {};
+  const digests = {};
+  const text = (s) => Buffer.from(s);
+  episodes.forEach(({ action, seed, id = seed }) => {
+    const ep = wasm.runEpisode(action, seed, size);
+    const dir = `${root}/${id}/${action}`;
+    const frames = ep.frames();
+    const px = size * size * 3;
+    for (let k = 0; k < ep.len; k++) files[`${dir}/${k}.png`] = png(frames.subarray(k * px, (k + 1) * px), size);
+    files[`${dir}/joint_${id}.txt`] = text(table(ep.joints(), 7));
+    files[`${dir}/object_${id}.txt`] = text(table(ep.object(), 3));
+    files[`${dir}/endpoint_${id}.txt`] = text(table(ep.endpoint(), 7));
+    digests[`${id}/${action}`] = ep.digest();
+    ep.free();
+  });
+  return { files, digests };
+}
+
+/**
  * Writes the episodes `[{action, seed}]` of the wasm package `wasm` at `size` px as sequences
  * 0, 1, … of a folder at `root` (replaced); returns their digests by "id/action".
  */
 export function writeFolder(wasm, root, episodes, size = 64) {
   rmSync(root, { recursive: true, force: true });
-  const digests = {};
-  episodes.forEach(({ action, seed, id = seed }) => {
-    const ep = wasm.runEpisode(action, seed, size);
-    const dir = join(root, String(id), action);
-    mkdirSync(dir, { recursive: true });
-    const frames = ep.frames();
-    const px = size * size * 3;
-    for (let k = 0; k < ep.len; k++) writeFileSync(join(dir, `${k}.png`), png(frames.subarray(k * px, (k + 1) * px), size));
-    writeFileSync(join(dir, `joint_${id}.txt`), table(ep.joints(), 7));
-    writeFileSync(join(dir, `object_${id}.txt`), table(ep.object(), 3));
-    writeFileSync(join(dir, `endpoint_${id}.txt`), table(ep.endpoint(), 7));
-    digests[`${id}/${action}`] = ep.digest();
-    ep.free();
-  });
+  const { files, digests } = folderFiles(wasm, ".", episodes, size);
+  for (const [path, bytes] of Object.entries(files)) {
+    mkdirSync(dirname(join(root, path)), { recursive: true });
+    writeFileSync(join(root, path), bytes);
+  }
   return digests;
 }
 

@@ -139,11 +139,31 @@ struct Args {
     /// and repeated frames inserted, in 80% of the training sequences.
     #[arg(long)]
     augment: bool,
+    /// With --augment: draw each freeze's length as a fraction of the warped sequence from
+    /// LOW-HIGH (e.g. 0.05-0.9, freezes of any length up to most of the action) instead of
+    /// 3-15 repeated steps.
+    #[arg(long, value_parser = parse_fraction_range, requires = "augment")]
+    freeze_fraction: Option<[f64; 2]>,
 
     /// Store the final and best models' weights in f16 (half the size; a resumed run keeps
     /// the run's choice, and --half with --resume turns it on).
     #[arg(long)]
     half: bool,
+}
+
+/// `LOW-HIGH`, two fractions with 0 <= LOW <= HIGH < 1.
+fn parse_fraction_range(s: &str) -> Result<[f64; 2], String> {
+    let expected =
+        || format!("expected LOW-HIGH with 0 <= LOW <= HIGH < 1 (e.g. 0.05-0.9), got {s:?}");
+    let (lo, hi) = s.split_once('-').ok_or_else(expected)?;
+    let (lo, hi): (f64, f64) = (
+        lo.trim().parse().map_err(|_| expected())?,
+        hi.trim().parse().map_err(|_| expected())?,
+    );
+    if !(0.0 <= lo && lo <= hi && hi < 1.0) {
+        return Err(expected());
+    }
+    Ok([lo, hi])
 }
 
 pub fn main() -> ExitCode {
@@ -258,7 +278,10 @@ fn run(args: Args) -> Result<(), TrainError> {
         config.val_every = args.val_every;
         config.checkpoint_every = args.checkpoint_every;
         config.quality_sequences = args.quality_sequences;
-        config.augment = args.augment.then(TimeWarpConfig::default);
+        config.augment = args.augment.then(|| TimeWarpConfig {
+            freeze_fraction: args.freeze_fraction,
+            ..TimeWarpConfig::default()
+        });
         config.init = args.init.clone();
         config.half = args.half;
         Trainer::new(data, &args.out, config)?
