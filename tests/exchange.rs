@@ -303,7 +303,8 @@ fn the_cli_exports_and_imports_and_names_the_file_in_errors() {
 }
 
 /// A Python with torch and safetensors: `$DMBN_PYTHON`, the benchmark's venv
-/// (`~/.cache/dmbn/venv`, made by bench/model.sh), or `python3`.
+/// (`~/.cache/dmbn/venv`, made by bench/model.sh), or `python3`; without one, the calling
+/// test is reported as skipped.
 fn python_with_torch() -> Option<PathBuf> {
     let venv =
         std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".cache/dmbn/venv/bin/python"));
@@ -321,6 +322,9 @@ fn python_with_torch() -> Option<PathBuf> {
             return Some(python);
         }
     }
+    support::skip(
+        "no Python with torch and safetensors (set DMBN_PYTHON, or run bench/model.sh once)",
+    );
     None
 }
 
@@ -337,7 +341,6 @@ fn floats(file: &SafeTensors, name: &str) -> Vec<f32> {
 #[test]
 fn the_pytorch_twin_predicts_what_dmbn_predict_does() {
     let Some(python) = python_with_torch() else {
-        println!("note: no Python with torch and safetensors (set DMBN_PYTHON, or run bench/model.sh once); skipping");
         return;
     };
     let dir = tempfile::tempdir().unwrap();
@@ -428,5 +431,69 @@ fn the_pytorch_twin_predicts_what_dmbn_predict_does() {
                 );
             }
         }
+    }
+}
+
+/// Weights changed in PyTorch come back: the twin loads an exported file, shifts one tensor
+/// (the joint mean head's bias, +0.5 in normalised units), `save`s it, and `dmbn import` gives
+/// a model file whose joint means moved by exactly 0.5 σ of the normalisation and nothing else.
+#[test]
+fn the_pytorch_twin_saves_what_dmbn_import_reads() {
+    let Some(python) = python_with_torch() else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let (exported, trained, back) = (
+        dir.path().join("dmbn.safetensors"),
+        dir.path().join("trained.safetensors"),
+        dir.path().join("trained.dmbn"),
+    );
+    let original = std::fs::read(support::asset("models/dmbn-sim.dmbn")).unwrap();
+    std::fs::write(&exported, export_safetensors(&original, false).unwrap()).unwrap();
+    let script = "import sys, torch\n\
+        sys.path.insert(0, sys.argv[1])\n\
+        import dmbn_torch\n\
+        model = dmbn_torch.load(sys.argv[2])\n\
+        with torch.no_grad():\n    model.network.decoder.joint.mean.bias.add_(0.5)\n\
+        dmbn_torch.save(model, sys.argv[3])\n";
+    for command in [
+        Command::new(&python)
+            .args(["-c", script])
+            .arg(Path::new(env!("CARGO_MANIFEST_DIR")).join("python"))
+            .arg(&exported)
+            .arg(&trained),
+        Command::new(env!("CARGO_BIN_EXE_dmbn"))
+            .arg("import")
+            .arg("--from")
+            .arg(&trained)
+            .arg("--out")
+            .arg(&back),
+    ] {
+        let out = command.output().unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{stderr}");
+    }
+
+    let (obs, times) = observations();
+    let predict = |bytes: &[u8]| {
+        Predictor::from_bytes(bytes)
+            .unwrap()
+            .predict(&obs, &times, 0.5)
+            .unwrap()
+    };
+    let imported = std::fs::read(&back).unwrap();
+    let (before, after) = (predict(&original), predict(&imported));
+    assert_eq!(
+        after.image_mean, before.image_mean,
+        "the frames are untouched"
+    );
+    assert_eq!(after.joint_sigma, before.joint_sigma);
+    let std = read_header(&original).unwrap().normalization.std;
+    for (i, (a, b)) in after.joint_mean.iter().zip(&before.joint_mean).enumerate() {
+        let moved = (a - b) / std[i % 7];
+        assert!(
+            (moved - 0.5).abs() < 1e-4,
+            "joint {i}: moved {moved} σ, expected 0.5"
+        );
     }
 }

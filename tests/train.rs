@@ -82,6 +82,25 @@ fn loss_falls(models: &[ModelKind]) {
     }
 }
 
+/// A run of `config` into `out`, to its last step.
+fn run_to_the_end(data: &Path, out: &Path, config: TrainConfig) {
+    new_trainer(data, out, config).unwrap().run(|_| {}).unwrap();
+}
+
+/// A run of `config` into `out` killed (a panic in its progress callback) right after step
+/// `step` was logged: what a crash leaves behind.
+fn run_killed_after(data: &Path, out: &Path, config: TrainConfig, step: u64) {
+    let mut trainer = new_trainer(data, out, config).unwrap();
+    let killed = catch_unwind(AssertUnwindSafe(|| {
+        trainer.run(|p| {
+            if p.step == step {
+                panic!("killed after step {step}");
+            }
+        })
+    }));
+    assert!(killed.is_err(), "the run was not interrupted");
+}
+
 /// A line of `metrics.jsonl` without its one wall-clock field: what two runs of the same
 /// steps must agree on exactly.
 fn deterministic(m: &Metrics) -> Metrics {
@@ -154,24 +173,12 @@ fn a_cosine_run_killed_between_checkpoints_resumes_as_if_never_stopped() {
     config.checkpoint_every = 3;
     config.half = true;
     let whole = tmp.path().join("whole");
-    new_trainer(&data, &whole, config.clone())
-        .unwrap()
-        .run(|_| {})
-        .unwrap();
+    run_to_the_end(&data, &whole, config.clone());
 
     // Killed right after step 5 was logged: the last checkpoint is step 3's, and the log
     // holds steps 4 and 5 that the resumed run must redo (and not log twice).
     let parts = tmp.path().join("parts");
-    let mut trainer = new_trainer(&data, &parts, config.clone()).unwrap();
-    let killed = catch_unwind(AssertUnwindSafe(|| {
-        trainer.run(|p| {
-            if p.step == killed_at {
-                panic!("killed after step {killed_at}");
-            }
-        })
-    }));
-    assert!(killed.is_err(), "the run was not interrupted");
-    drop(trainer);
+    run_killed_after(&data, &parts, config.clone(), killed_at);
     assert!(
         !parts.join("model.dmbn").exists(),
         "the killed run never finished"
@@ -208,9 +215,23 @@ fn a_cosine_run_killed_between_checkpoints_resumes_as_if_never_stopped() {
     // The learning rates are the cosine of the whole run (a resumed schedule restarted, or
     // stretched over the remaining steps, would differ), falling at every step.
     for m in &a {
-        assert_eq!(m.lr, config.schedule.rate(config.lr, m.step - 1, steps));
+        // (Within an ulp: metrics.jsonl is read back by serde_json, whose float parsing may
+        // round the last bit differently.)
+        let want = config.schedule.rate(config.lr, m.step - 1, steps);
+        assert!(
+            (m.lr - want).abs() <= 1e-15 * want,
+            "step {}: {} vs {want}",
+            m.step,
+            m.lr
+        );
     }
     assert!(a.windows(2).all(|w| w[1].lr < w[0].lr), "{a:?}");
+    assert_eq!(a[0].lr, config.lr, "the cosine starts at the base rate");
+    let last = a.last().unwrap().lr;
+    assert!(
+        (last - 0.1 * config.lr).abs() < 1e-12,
+        "and ends at 10% of it: {last}"
+    );
     assert!(a.iter().any(|m| m.val_loss.is_some()));
     assert_eq!(
         final_prediction(&whole),
@@ -359,6 +380,10 @@ fn bad_settings_are_refused() {
     let err = new_trainer(&data, &out, config).err().unwrap();
     assert!(err.to_string().contains("batch"), "{err}");
     let mut config = small(ModelKind::Dmbn, 5);
+    config.val_batches = 0;
+    let err = new_trainer(&data, &out, config).err().unwrap();
+    assert!(err.to_string().contains("val_batches"), "{err}");
+    let mut config = small(ModelKind::Dmbn, 5);
     config.model.image_size = 100;
     assert!(new_trainer(&data, &out, config).is_err());
     let mut config = small(ModelKind::Attn, 5);
@@ -449,4 +474,161 @@ fn init_starts_from_a_model_files_weights_with_the_runs_normalisation() {
         }
         other => panic!("expected an init error, got {:?}", other.err()),
     }
+}
+
+#[test]
+fn schedules_start_and_end_where_they_say() {
+    let (lr, steps) = (1e-3, 9);
+    let rates = |s: Schedule| -> Vec<f64> { (0..steps).map(|k| s.rate(lr, k, steps)).collect() };
+    assert!(rates(Schedule::Constant).iter().all(|&r| r == lr));
+    let cosine = rates(Schedule::Cosine {
+        final_fraction: 0.05,
+    });
+    assert_eq!(cosine[0], lr);
+    assert!((cosine[8] - 0.05 * lr).abs() < 1e-15, "{cosine:?}");
+    assert!(
+        (cosine[4] - 0.525 * lr).abs() < 1e-15,
+        "halfway, half-way down: {cosine:?}"
+    );
+    assert!(cosine.windows(2).all(|w| w[1] < w[0]));
+    // `train --schedule step`: every steps/3, gamma 0.3.
+    let step = rates(Schedule::Step {
+        every: 3,
+        gamma: 0.3,
+    });
+    let want = [1.0, 1.0, 1.0, 0.3, 0.3, 0.3, 0.09, 0.09, 0.09].map(|f| f * lr);
+    for (got, want) in step.iter().zip(want) {
+        assert!((got - want).abs() < 1e-15, "{step:?}");
+    }
+    // A one-step run stays at the base rate (no division by zero).
+    let one = Schedule::Cosine {
+        final_fraction: 0.05,
+    };
+    assert_eq!(one.rate(lr, 0, 1), lr);
+}
+
+#[test]
+fn val_fraction_0_holds_no_id_out_and_the_trainer_says_so() {
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("data");
+    dataset(&data, 3);
+    let mut config = small(ModelKind::Pte, 1);
+    config.val_fraction = 0.0;
+    let trainer = new_trainer(&data, &tmp.path().join("a"), config.clone()).unwrap();
+    assert_eq!(trainer.val_ids(), &[] as &[u32]);
+    assert!(trainer.validates_on_training_data());
+    config.val_fraction = 0.1;
+    let trainer = new_trainer(&data, &tmp.path().join("b"), config).unwrap();
+    assert_eq!(
+        trainer.val_ids(),
+        &[2],
+        "a fraction above 0 holds at least one id out"
+    );
+    assert!(!trainer.validates_on_training_data());
+    // The command line says it before training.
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_train"))
+        .args([
+            "--model",
+            "pte",
+            "--steps",
+            "1",
+            "--batch",
+            "1",
+            "--val-fraction",
+            "0",
+        ])
+        .args(["--quality-sequences", "0", "--data"])
+        .arg(&data)
+        .arg("--out")
+        .arg(tmp.path().join("c"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(stderr.contains("no id is held out"), "{stderr}");
+    assert!(
+        stderr.contains("measured on training sequences"),
+        "{stderr}"
+    );
+}
+
+#[test]
+fn a_crash_between_the_checkpoints_renames_resumes_from_the_previous_one() {
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("data");
+    dataset(&data, 3);
+    let config = small(ModelKind::Dmbn, 4);
+    let whole = tmp.path().join("whole");
+    run_to_the_end(&data, &whole, config.clone());
+
+    // Killed while writing step 4's checkpoint, after `checkpoint/` became `checkpoint.old/`
+    // and before `checkpoint.tmp/` became `checkpoint/`: the complete step-2 checkpoint is
+    // the old one, and the new one lies half-written.
+    let parts = tmp.path().join("parts");
+    run_killed_after(&data, &parts, config.clone(), 3);
+    let (dir, old, tmp_dir) = (
+        Checkpoint::dir(&parts),
+        parts.join("checkpoint.old"),
+        parts.join("checkpoint.tmp"),
+    );
+    std::fs::rename(&dir, &old).unwrap();
+    std::fs::create_dir_all(&tmp_dir).unwrap();
+    std::fs::write(tmp_dir.join("model.dmbn"), b"half a file").unwrap();
+    assert_eq!(
+        Checkpoint::read(&parts).unwrap().2.step,
+        2,
+        "the old checkpoint is read"
+    );
+
+    let mut resumed = Trainer::resume(None, &parts, None).unwrap();
+    assert_eq!(resumed.step_count(), 2);
+    resumed.run(|_| {}).unwrap();
+    assert_eq!(
+        final_prediction(&whole),
+        final_prediction(&parts),
+        "same final weights"
+    );
+    assert_eq!(Checkpoint::read(&parts).unwrap().2.step, 4);
+    assert!(
+        !old.exists() && !tmp_dir.exists(),
+        "the next checkpoint cleans both up"
+    );
+}
+
+#[test]
+fn augmented_training_warps_its_batches_and_resumes_exactly() {
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("data");
+    dataset(&data, 3);
+    let plain = small(ModelKind::Pte, 4);
+    let mut warped = plain.clone();
+    warped.augment = Some(dmbn::augment::TimeWarpConfig {
+        probability: 1.0,
+        freeze_probability: 1.0,
+        ..Default::default()
+    });
+    let run = |config: &TrainConfig, name: &str| {
+        let out = tmp.path().join(name);
+        run_to_the_end(&data, &out, config.clone());
+        out
+    };
+    let (a, b) = (run(&plain, "plain"), run(&warped, "warped"));
+    let (ma, mb) = (metrics(&a), metrics(&b));
+    assert_ne!(
+        ma[0].loss, mb[0].loss,
+        "the same seed trains on other (warped) batches"
+    );
+    assert!(mb.iter().all(|m| m.loss.is_finite()));
+
+    // Killed after step 3, resumed from step 2's checkpoint: the warps drawn are the same.
+    let parts = tmp.path().join("parts");
+    run_killed_after(&data, &parts, warped.clone(), 3);
+    let mut resumed = Trainer::resume(None, &parts, None).unwrap();
+    assert_eq!(resumed.config().augment, warped.augment);
+    resumed.run(|_| {}).unwrap();
+    let mp = metrics(&parts);
+    for (x, y) in mb.iter().zip(&mp) {
+        assert_eq!(deterministic(x), deterministic(y), "step {}", x.step);
+    }
+    assert_eq!(final_prediction(&b), final_prediction(&parts));
 }

@@ -6,34 +6,19 @@ use super::ModelError;
 
 pub use crate::data::IMAGE_SIZES;
 
-/// Which network: the paper's two, or the attentive model. On the command line (native), a
-/// clap value: `dmbn`, `pte` or `attn`.
+/// Which network: the paper's two, or the attentive model (named `dmbn`, `pte` or `attn` in
+/// model files and on the command line).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
-#[cfg_attr(not(target_arch = "wasm32"), derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum ModelKind {
     /// The original DMBN, "time as channel": the context time is an input channel of both
     /// encoders and the target time is concatenated to the representation.
-    #[cfg_attr(
-        not(target_arch = "wasm32"),
-        value(help = "DMBN, time as an input channel (the original)")
-    )]
     Dmbn,
     /// DMBN-PTE, "time as context" (positional time encoding): a shared projection P(t) is
     /// added to every context encoding and subtracted from the representation per target.
-    #[cfg_attr(
-        not(target_arch = "wasm32"),
-        value(help = "DMBN-PTE, positional time encoding (the paper's fix)")
-    )]
     Pte,
     /// The attentive model: DMBN-PTE's context encodings aggregated per target by
     /// cross-attention over the context times instead of a mean.
-    #[cfg_attr(
-        not(target_arch = "wasm32"),
-        value(
-            help = "The attentive model: DMBN-PTE's encodings, cross-attention over the context times"
-        )
-    )]
     Attn,
 }
 

@@ -20,12 +20,13 @@ pub enum Schedule {
 }
 
 impl Schedule {
-    /// Learning rate at `step` (0-based) of `steps`, from the base rate `lr`.
+    /// Learning rate at `step` (0-based) of `steps`, from the base rate `lr`: the cosine
+    /// reaches `final_fraction` of `lr` at the last step (`steps - 1`).
     pub fn rate(&self, lr: f64, step: u64, steps: u64) -> f64 {
         match *self {
             Schedule::Constant => lr,
             Schedule::Cosine { final_fraction } => {
-                let progress = step as f64 / steps.max(1) as f64;
+                let progress = (step as f64 / steps.saturating_sub(1).max(1) as f64).min(1.0);
                 let floor = lr * final_fraction;
                 floor + 0.5 * (lr - floor) * (1.0 + (std::f64::consts::PI * progress).cos())
             }
@@ -85,11 +86,12 @@ pub struct TrainConfig {
     /// arm) is learnt as well as what it is sure of; 0 for the paper's plain NLL.
     #[serde(default)]
     pub beta_nll: f64,
-    /// Fraction of sequence ids held out for validation.
+    /// Fraction of sequence ids held out for validation, in [0, 1); 0 holds none out, and
+    /// validation then runs on training sequences (the trainer says so).
     pub val_fraction: f64,
     /// Validate every this many steps.
     pub val_every: u64,
-    /// Batches in the (fixed) validation set.
+    /// Batches in the (fixed) validation set: at least 1.
     pub val_batches: usize,
     /// Write a checkpoint every this many steps.
     pub checkpoint_every: u64,
@@ -150,6 +152,7 @@ impl TrainConfig {
             ("max_contexts", self.max_contexts as u64),
             ("targets_per_sequence", self.targets_per_sequence as u64),
             ("val_every", self.val_every),
+            ("val_batches", self.val_batches as u64),
             ("checkpoint_every", self.checkpoint_every),
         ];
         for (field, value) in positive {

@@ -6,7 +6,9 @@ use super::TrainError;
 
 /// Training and validation sequences of a dataset, split by sequence id so both actions of
 /// one id land on the same side: the last `val_fraction` of the ids (at least one when there
-/// are two or more) are held out.
+/// are two or more) are held out. `val_fraction` 0, or a dataset of one id, holds none out:
+/// the validation loss then measures training sequences ([`Split::validates_on_training_data`])
+/// and the quality benchmark (best.dmbn) does not run.
 pub struct Split {
     pub train: Vec<Sequence>,
     pub val: Vec<Sequence>,
@@ -25,7 +27,7 @@ impl Split {
         }
         let dataset = Dataset::open(root)?;
         let ids = dataset.ids();
-        let held = if ids.len() < 2 {
+        let held = if ids.len() < 2 || val_fraction == 0.0 {
             0
         } else {
             ((ids.len() as f64 * val_fraction).ceil() as usize).max(1)
@@ -51,5 +53,11 @@ impl Split {
             val,
             val_ids,
         })
+    }
+
+    /// True when no id is held out, so that validation (the loss and `best.dmbn`) can only
+    /// measure the training sequences themselves.
+    pub fn validates_on_training_data(&self) -> bool {
+        self.val_ids.is_empty()
     }
 }

@@ -241,6 +241,12 @@ impl Trainer {
         &self.split.val_ids
     }
 
+    /// True when no id is held out (`val_fraction` 0 or a one-id dataset): the validation loss
+    /// is measured on training sequences and says nothing about unseen ones.
+    pub fn validates_on_training_data(&self) -> bool {
+        self.split.validates_on_training_data()
+    }
+
     /// One optimiser step on a fresh batch; a non-finite loss stops before touching the weights.
     pub fn step(&mut self) -> Result<(LossValues, f64), TrainError> {
         let (batch, joint_targets) =

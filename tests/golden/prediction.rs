@@ -16,7 +16,7 @@ pub const OBSERVE: [usize; 3] = [0, 20, 40];
 /// Blending coefficient.
 pub const BLEND: f32 = 0.5;
 /// Every this many values of the frames go into the sample.
-const STRIDE: usize = 61;
+pub const STRIDE: usize = 61;
 
 /// What is compared: all joint means and σ, and every 61st value of the mean and σ frames.
 pub fn sample(p: &SequencePrediction) -> Vec<f32> {

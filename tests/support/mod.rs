@@ -14,14 +14,34 @@ pub fn dmbn2020() -> Option<PathBuf> {
     path.is_dir().then_some(path)
 }
 
-/// The original DMBN dataset opened, or `None` after printing the note that the test using it
-/// passes without it.
+/// The original DMBN dataset opened, or `None` after reporting the calling test as skipped.
 pub fn dmbn2020_dataset() -> Option<dmbn::data::Dataset> {
     let Some(root) = dmbn2020() else {
-        println!("note: dmbn2020 not found (set DMBN2020); skipping");
+        skip("no original DMBN data (set DMBN2020=path/to/data2020)");
         return None;
     };
     Some(dmbn::data::Dataset::open(&root).unwrap())
+}
+
+/// Reports the calling test as skipped for `reason`: on stderr, and as a line of the file
+/// `$DMBN_SKIPPED` names (`.ci/run` counts them, so that the closing line says "N skipped"
+/// instead of counting the test as passed). The test then returns without checking anything.
+pub fn skip(reason: &str) {
+    let test = std::thread::current()
+        .name()
+        .unwrap_or("a test")
+        .to_string();
+    eprintln!("skipped: {test}: {reason}");
+    if let Some(file) = std::env::var_os("DMBN_SKIPPED") {
+        use std::io::Write;
+        let line = format!("{test}: {reason}\n");
+        let appended = std::fs::OpenOptions::new()
+            .create(true)
+            .append(true)
+            .open(&file)
+            .and_then(|mut f| f.write_all(line.as_bytes()));
+        appended.expect("DMBN_SKIPPED names a writable file");
+    }
 }
 
 /// A file of the repository's `assets/`.

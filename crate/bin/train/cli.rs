@@ -10,6 +10,27 @@ use dmbn::data::id_list;
 use dmbn::model::{read_header, ModelConfig, ModelKind};
 use dmbn::train::{Schedule, TrainConfig, TrainError, Trainer};
 
+/// `--model`: the command line's names of [`ModelKind`].
+#[derive(Clone, Copy, ValueEnum)]
+enum ModelArg {
+    /// DMBN, time as an input channel (the original)
+    Dmbn,
+    /// DMBN-PTE, positional time encoding (the paper's fix)
+    Pte,
+    /// The attentive model: DMBN-PTE's encodings, cross-attention over the context times
+    Attn,
+}
+
+impl From<ModelArg> for ModelKind {
+    fn from(arg: ModelArg) -> Self {
+        match arg {
+            ModelArg::Dmbn => ModelKind::Dmbn,
+            ModelArg::Pte => ModelKind::Pte,
+            ModelArg::Attn => ModelKind::Attn,
+        }
+    }
+}
+
 #[derive(Clone, Copy, ValueEnum)]
 enum ScheduleArg {
     Constant,
@@ -28,7 +49,7 @@ struct Args {
     data: Option<PathBuf>,
     /// Which network (with --resume or --init, the checkpoint's or the file's: may be left out).
     #[arg(long, value_enum, required_unless_present_any = ["resume", "init"])]
-    model: Option<ModelKind>,
+    model: Option<ModelArg>,
     /// Start from this model file's weights instead of fresh weights (train a shipped model
     /// longer, or fine-tune it on other data); the network, frame size and σ floor are the
     /// file's, the joint normalisation is fitted on --data's training ids as for a fresh run.
@@ -118,7 +139,9 @@ struct Args {
     /// Lower bound of every predicted σ.
     #[arg(long, default_value_t = defaults().model.sigma_floor)]
     sigma_floor: f64,
-    /// Fraction of sequence ids held out for validation.
+    /// Fraction of sequence ids held out for validation (the last ids; at least one when it is
+    /// above 0). 0 holds none out: the validation loss is then measured on training sequences
+    /// (said when the run starts) and no best.dmbn is kept.
     #[arg(long, default_value_t = defaults().val_fraction)]
     val_fraction: f64,
     /// Validate every this many steps.
@@ -194,7 +217,7 @@ fn defaults() -> TrainConfig {
 }
 
 fn run(args: Args) -> Result<(), TrainError> {
-    let model = args.model;
+    let model = args.model.map(ModelKind::from);
     let mut trainer = if args.resume {
         let mut trainer = Trainer::resume(args.data.as_deref(), &args.out, args.steps)?;
         if args.half {
@@ -303,6 +326,12 @@ fn run(args: Args) -> Result<(), TrainError> {
         id_list(trainer.val_ids()),
         args.out.display()
     );
+    if trainer.validates_on_training_data() {
+        eprintln!(
+            "note: no id is held out (--val-fraction 0, or one id in the dataset): the validation \
+             loss is measured on training sequences, and no best.dmbn is kept"
+        );
+    }
     let path = trainer.run(|p| {
         bar.set_position(p.step);
         let val = p.val_loss.map_or("-".to_string(), |v| format!("{v:.4}"));
