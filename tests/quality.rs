@@ -10,11 +10,10 @@ mod support;
 use std::path::Path;
 use std::process::Command;
 
-use burn::tensor::Device;
 use dmbn::data::{Normalization, Sequence};
-use dmbn::model::{ModelConfig, ModelKind};
+
 use dmbn::predict::Predictor;
-use dmbn::quality::{score_sequence, Accumulator, MeanMotion, Quality, Scenario, SequenceScores};
+use dmbn::quality::{score_sequence, MeanMotion, Scenario};
 use dmbn::sim::{episode, Action};
 use golden_score as golden;
 
@@ -90,44 +89,6 @@ fn mean_motion() -> MeanMotion {
     MeanMotion::fit(reference.iter().map(|(a, s)| (*a, s))).unwrap()
 }
 
-/// The model's, the baseline's and the mean motion's measures over `seqs`.
-fn measure(
-    predictor: &Predictor,
-    seqs: &[(&str, Sequence)],
-    scenario: Scenario,
-    mean: &MeanMotion,
-) -> (Quality, Quality, Quality) {
-    let mut acc = SequenceScores {
-        mean_motion: Some(Accumulator::default()),
-        ..Default::default()
-    };
-    for (action, seq) in seqs {
-        let s = score_sequence(predictor, seq, action, scenario, 5, 0.5, Some(mean))
-            .unwrap()
-            .unwrap();
-        acc.model.merge(&s.model);
-        acc.baseline.merge(&s.baseline);
-        acc.mean_motion
-            .as_mut()
-            .unwrap()
-            .merge(s.mean_motion.as_ref().unwrap());
-    }
-    (
-        acc.model.finish(),
-        acc.baseline.finish(),
-        acc.mean_motion.unwrap().finish(),
-    )
-}
-
-/// An untrained model of `kind`, seeded.
-fn untrained(kind: ModelKind) -> Predictor {
-    let device = Device::flex();
-    device.seed(5);
-    let model = ModelConfig::new(kind).init(&device).unwrap();
-    model.draw_weights();
-    Predictor::new(model, Normalization::identity())
-}
-
 /// A model that ignores its observations scores like the action's mean motion at best:
 /// every shipped simulator model must do clearly better on episodes it never saw, and better
 /// than an untrained model of its kind.
@@ -147,9 +108,9 @@ fn uses_its_observations(names: &[&str]) {
     let (seqs, mean) = (unseen(), mean_motion());
     for &name in names {
         let predictor = Predictor::load(support::asset(&format!("models/{name}.dmbn"))).unwrap();
-        let (model, _, mean_motion) = measure(&predictor, &seqs, Scenario::Interp, &mean);
-        let (fresh, _, _) = measure(
-            &untrained(predictor.model().kind()),
+        let (model, _, mean_motion) = support::measure(&predictor, &seqs, Scenario::Interp, &mean);
+        let (fresh, _, _) = support::measure(
+            &support::untrained(predictor.model().kind(), Normalization::identity()),
             &seqs,
             Scenario::Interp,
             &mean,
@@ -204,7 +165,7 @@ fn uses_its_observations(names: &[&str]) {
 fn the_default_model_beats_the_trivial_baselines() {
     let (seqs, mean) = (unseen(), mean_motion());
     let predictor = Predictor::from_bytes(golden::MODEL).unwrap();
-    let (model, baseline, _) = measure(&predictor, &seqs, Scenario::Interp, &mean);
+    let (model, baseline, _) = support::measure(&predictor, &seqs, Scenario::Interp, &mean);
     println!("interp: {model:?}\nbaseline: {baseline:?}");
     assert!(
         model.joint_rmse <= baseline.joint_rmse,
@@ -227,7 +188,7 @@ fn the_default_model_beats_the_trivial_baselines() {
         .object_iou
         .expect("the object is visible in the true frames");
     assert!(iou >= 0.3, "object IoU {iou}");
-    let (model, baseline, _) = measure(&predictor, &seqs, Scenario::Extrap, &mean);
+    let (model, baseline, _) = support::measure(&predictor, &seqs, Scenario::Extrap, &mean);
     println!("extrap: {model:?}\nbaseline: {baseline:?}");
     assert!(
         model.joint_rmse <= 0.5 * baseline.joint_rmse,
@@ -243,7 +204,7 @@ fn the_default_model_beats_the_trivial_baselines() {
 fn the_default_model_halves_hold_last_s_frame_error_when_forecasting() {
     let (seqs, mean) = (unseen(), mean_motion());
     let predictor = Predictor::from_bytes(golden::MODEL).unwrap();
-    let (model, baseline, _) = measure(&predictor, &seqs, Scenario::Extrap, &mean);
+    let (model, baseline, _) = support::measure(&predictor, &seqs, Scenario::Extrap, &mean);
     println!("extrap: {model:?}\nbaseline: {baseline:?}");
     assert!(
         model.image_mse <= 0.5 * baseline.image_mse,

@@ -201,6 +201,46 @@ export function drawnAgainstWasm(page, k, file, { otherStep, otherModel }) {
   );
 }
 
+/** The number of the page's latest logged event (www/hooks.js: `window.dmbnEvents`), 0 before any. */
+export const lastEvent = (page) => page.evaluate(() => window.dmbnEvents.at(-1)?.n ?? 0);
+
+/** The page's logged events after event number `since`, in order. */
+export const eventsSince = (page, since = 0) => page.evaluate((n) => window.dmbnEvents.filter((e) => e.n > n), since);
+
+/** How a prediction ended, in the event log. */
+export const ENDS = ["finished", "cancelled", "failed"];
+
+/**
+ * Checks the life of every prediction in the event log `log` (from the page's start): one runs
+ * at a time (a prediction starts only after the one before ended), its chunks are stored only
+ * while it runs, and only the latest one started is drawn, never once it was cancelled.
+ * Returns {id → {start, end, chunks, drawn}}.
+ */
+export function lifecycles(log) {
+  const lives = new Map();
+  let running = null;
+  let latest = null;
+  for (const e of log) {
+    if (e.type === "start") {
+      assert.equal(running, null, `prediction ${e.id} started while ${running} was running (event ${e.n})`);
+      running = latest = e.id;
+      lives.set(e.id, { start: e, end: null, chunks: 0, drawn: 0 });
+    } else if (ENDS.includes(e.type)) {
+      assert.equal(e.id, running, `prediction ${e.id} ${e.type} while ${running} was the one running (event ${e.n})`);
+      lives.get(e.id).end = e;
+      running = null;
+    } else if (e.type === "chunk") {
+      assert.equal(e.id, running, `a chunk of prediction ${e.id} stored while ${running} was the one running (event ${e.n})`);
+      lives.get(e.id).chunks++;
+    } else if (e.type === "drawn") {
+      assert.equal(e.id, latest, `prediction ${e.id} drawn after ${latest} started (event ${e.n})`);
+      assert.notEqual(lives.get(e.id).end?.type, "cancelled", `prediction ${e.id} drawn after it was cancelled (event ${e.n})`);
+      lives.get(e.id).drawn++;
+    }
+  }
+  return lives;
+}
+
 /** Stops playback, so frames only change when a test asks. */
 export async function pause(page) {
   if ((await page.getAttribute("#play", "aria-pressed")) === "true") await page.click("#play");

@@ -79,3 +79,50 @@ pub fn save_model(
     let bytes = dmbn::model::save_bytes(model, normalization, half).unwrap();
     dmbn::data::write_atomic(path, &bytes).unwrap();
 }
+
+/// The model's, the baseline's and the mean motion's measures over `seqs` (`(action,
+/// sequence)`) in `scenario`: 5 observations (interp), both modalities blended half and half.
+pub fn measure(
+    predictor: &dmbn::predict::Predictor,
+    seqs: &[(&str, dmbn::data::Sequence)],
+    scenario: dmbn::quality::Scenario,
+    mean: &dmbn::quality::MeanMotion,
+) -> (
+    dmbn::quality::Quality,
+    dmbn::quality::Quality,
+    dmbn::quality::Quality,
+) {
+    use dmbn::quality::{score_sequence, Accumulator, SequenceScores};
+    let mut acc = SequenceScores {
+        mean_motion: Some(Accumulator::default()),
+        ..Default::default()
+    };
+    for (action, seq) in seqs {
+        let s = score_sequence(predictor, seq, action, scenario, 5, 0.5, Some(mean))
+            .unwrap()
+            .unwrap();
+        acc.model.merge(&s.model);
+        acc.baseline.merge(&s.baseline);
+        acc.mean_motion
+            .as_mut()
+            .unwrap()
+            .merge(s.mean_motion.as_ref().unwrap());
+    }
+    (
+        acc.model.finish(),
+        acc.baseline.finish(),
+        acc.mean_motion.unwrap().finish(),
+    )
+}
+
+/// An untrained model of `kind` (seeded), with `normalization`.
+pub fn untrained(
+    kind: dmbn::model::ModelKind,
+    normalization: dmbn::data::Normalization,
+) -> dmbn::predict::Predictor {
+    let device = burn::tensor::Device::flex();
+    device.seed(5);
+    let model = dmbn::model::ModelConfig::new(kind).init(&device).unwrap();
+    model.draw_weights();
+    dmbn::predict::Predictor::new(model, normalization)
+}
