@@ -131,7 +131,7 @@ fn original_data_weights_use_their_observations_on_held_out_ids() {
     let held: Vec<(&str, Sequence)> = held.iter().map(|(a, s)| (a.as_str(), s.clone())).collect();
     for name in ["attn-2020", "dmbn-2020", "pte-2020", "pte-aug-2020"] {
         let predictor = shipped(name);
-        let fresh = support::untrained(predictor.model().kind(), predictor.normalization().clone());
+        let fresh = support::untrained(predictor.model().kind(), *predictor.normalization());
         let (model, _, motion) = support::measure(&predictor, &held, Scenario::Interp, &mean);
         let (untrained, _, _) = support::measure(&fresh, &held, Scenario::Interp, &mean);
         for (what, got, motion, untrained) in [
@@ -189,7 +189,7 @@ fn original_data_weights_draw_simulated_scenes_better_than_untrained_models() {
     for name in ["attn-2020", "dmbn-2020", "pte-2020", "pte-aug-2020"] {
         let predictor = shipped(name);
         let kind = predictor.model().kind();
-        let fresh = support::untrained(kind, predictor.normalization().clone());
+        let fresh = support::untrained(kind, *predictor.normalization());
         let (model, _, _) = support::measure(&predictor, &seqs, Scenario::Interp, &mean);
         let (untrained, _, _) = support::measure(&fresh, &seqs, Scenario::Interp, &mean);
         let (what, got, fresh) = if kind == ModelKind::Attn {
