@@ -2,9 +2,11 @@
 // The demo page in headless Chromium (the browser tests' setup): time from navigation to
 // `ready` on localhost, the wasm size (raw and gzip), one predicted frame and a 100-step
 // sequence for the attentive model (the page's default), DMBN and DMBN-PTE through the page's
-// worker, the page's own progressive prediction of a whole episode, and live mode's latency
-// (new observation → first frames / whole forecast of the rest, with the other observations
-// kept encoded in the workers and with nothing kept; longest main-thread task). Saves
+// worker, the page's own progressive prediction of a whole episode (and the longest main-thread
+// task meanwhile), and live mode's latency (new observation → first frames / whole forecast of
+// the rest, with the other observations kept encoded in the workers and with nothing kept;
+// longest main-thread task while playing). The browser tests assert no duration: the
+// main thread's figures and their goals are here. Saves
 // screenshots of the page mid-prediction to docs/page.png, in live mode to docs/live.png and
 // in imitate mode to docs/imitate.png.
 //
@@ -52,6 +54,24 @@ const median = (xs) => {
 };
 const round = (v, d = 1) => Number(v.toFixed(d));
 const TIMEOUT = 120_000;
+
+/** Starts recording the page's long main-thread tasks (over 50 ms; the browser reports them). */
+async function watchLongTasks(page) {
+  const observable = await page.evaluate(() => {
+    window.longTasks = [];
+    new PerformanceObserver((list) => window.longTasks.push(...list.getEntries().map((e) => e.duration))).observe({ type: "longtask" });
+    return PerformanceObserver.supportedEntryTypes.includes("longtask");
+  });
+  // (Else "0 ms" would mean nothing.)
+  if (!observable) throw new Error("this Chromium does not report long tasks");
+}
+
+/** The longest task recorded so far, in ms (0 when none exceeded 50 ms). */
+async function longestTask(page) {
+  // The observer reports after the tasks: a task of its own lets the last reports in.
+  await page.evaluate(() => new Promise((ok) => setTimeout(ok, 100)));
+  return Math.max(0, ...(await page.evaluate(() => window.longTasks)));
+}
 /** The models timed: [page model id, weight file]; the first is the page's default. */
 const MODELS = [["attn", "attn-sim.dmbn"], ["dmbn", "dmbn-sim.dmbn"], ["pte", "pte-sim.dmbn"]];
 const DEFAULT = MODELS[0][0];
@@ -176,14 +196,17 @@ try {
     for (let i = 0; i < runs * 5; i++) one.push(await time(1));
     const seq = [];
     for (let i = 0; i < runs; i++) seq.push(await time(100));
-    // The page's own path: Predict → every step of the episode drawn, state `predicted`.
+    // The page's own path: Predict → every step of the episode drawn, state `predicted`; and
+    // the longest main-thread task meanwhile (the page stays responsive).
     const whole = [];
+    await watchLongTasks(page);
     for (let i = 0; i < 3; i++) {
       const before = await page.evaluate(() => Number(document.body.dataset.predictions ?? 0));
       await page.click("#predict");
       await page.waitForFunction((n) => Number(document.body.dataset.predictions ?? 0) > n, before, { timeout: TIMEOUT });
       whole.push(await page.evaluate(() => window.dmbnTimings.prediction));
     }
+    const pageLongestTask = await longestTask(page);
     // The same 100 steps in one worker.
     await open(`model=${kind}&workers=1`);
     await time(100);
@@ -200,6 +223,7 @@ try {
       page_sequence_steps: whole[0].steps,
       page_sequence_ms: round(median(whole.map((w) => w.total_ms))),
       page_first_chunk_ms: round(median(whole.map((w) => w.first_chunk_ms))),
+      page_longest_task_ms: round(pageLongestTask),
     };
   }
   await context.close();
@@ -242,10 +266,7 @@ try {
     await page.locator("#live-every").fill("10");
     await page.locator("#live-every").dispatchEvent("change");
     await page.keyboard.press("Home");
-    await page.evaluate(() => {
-      window.longTasks = [];
-      new PerformanceObserver((list) => window.longTasks.push(...list.getEntries().map((e) => e.duration))).observe({ type: "longtask" });
-    });
+    await watchLongTasks(page);
     const played = await page.evaluate(() => window.dmbnTimings.live.length);
     await page.click("#play");
     await page.waitForFunction(() => document.getElementById("play").getAttribute("aria-pressed") === "false", null, { timeout: TIMEOUT });
@@ -267,7 +288,7 @@ try {
       played_steps: len,
       played_forecasts: playing.length,
       played_first_frames_ms: round(median(playing.map((r) => r.first_chunk_ms))),
-      longest_task_ms: round(Math.max(0, ...(await page.evaluate(() => window.longTasks)))),
+      longest_task_ms: round(await longestTask(page)),
     };
     await context.close();
   }
@@ -305,6 +326,7 @@ for (const [kind] of MODELS) {
   console.log(`| ${name}: 100-step sequence, 1 worker | ${ms(r.sequence100_one_worker_ms)} | |`);
   console.log(`| ${name}: 100-step sequence, first chunk (10 steps) back | ${ms(r.sequence100_first_chunk_ms)} | |`);
   console.log(`| ${name}: page, Predict → all ${r.page_sequence_steps} steps drawn | ${ms(r.page_sequence_ms)} | |`);
+  console.log(`| ${name}: page, longest main-thread task during those predictions | ${ms(r.page_longest_task_ms)} | < 300 ms |`);
 }
 const live = result.live;
 console.log(`| live mode: new observation → first frames of the new forecast (${NAMES[DEFAULT]}, 2 workers) | ${ms(live.first_frames_ms)} | ≤ 50 ms |`);
@@ -314,5 +336,5 @@ console.log(`| live mode: … of which encoding ${live.remainder_encoded} of the
 console.log(`| live mode, nothing kept encoded: ${live.scratch_observed} observations → first frames / whole ${live.scratch_steps}-step forecast | ${ms(live.scratch_first_frames_ms)} / ${ms(live.scratch_ms)} | |`);
 console.log(`| live mode: … of which encoding the ${live.scratch_observed} observations (slowest worker) | ${ms(live.scratch_encode_ms)} | |`);
 console.log(`| live mode: playing a ${live.played_steps}-step episode, every 10th step observed: forecasts finished, first frames | ${live.played_forecasts}, ${ms(live.played_first_frames_ms)} | |`);
-console.log(`| live mode: longest main-thread task while playing | ${ms(live.longest_task_ms)} | ≤ 50 ms |`);
+console.log(`| live mode: longest main-thread task while playing | ${ms(live.longest_task_ms)} | ≤ 50 ms (never 300 ms) |`);
 console.log(`\njson: ${JSON.stringify(result)}`);

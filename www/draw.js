@@ -1,21 +1,13 @@
-// Drawing the current step: true and predicted frames, σ map, timeline, joint plot, table map.
+// Drawing the current step as the state says: true and predicted frames, σ map, timeline, joint
+// plot, error plot, table map.
 
-import { follow, heldForecast, redrawErrors } from "./live.js";
+import { redrawErrors } from "./error_plot.js";
+import { log } from "./hooks.js";
 import { clampInt, observedSteps } from "./observations.js";
 import { drawJoints } from "./plot.js";
-import { firstDrawn } from "./prediction.js";
-import { state } from "./state.js";
+import { heldForecast, state } from "./state.js";
 import { ui } from "./ui.js";
 import { clearFrame, drawTable, drawTimeline, rgbImage } from "./views.js";
-
-/** Shows step `k` (clamped to the shown sequence). */
-export function show(k) {
-  if (!state.shown) return;
-  state.step = Math.max(0, Math.min(state.shown.len - 1, k));
-  ui.scrubber.value = String(state.step);
-  follow(state.step);
-  render();
-}
 
 /** What waits for the next animation frame: nothing, the frames alone, or everything. */
 let drawSoon = null;
@@ -38,6 +30,13 @@ export function renderSoon({ framesOnly = false } = {}) {
       if (state.prediction?.count) firstDrawn(state.prediction);
     } else if (wanted) render();
   });
+}
+
+/** The prediction's first steps are drawn: when, for its timings. */
+export function firstDrawn(p) {
+  if (p.firstAt !== undefined) return;
+  p.firstAt = performance.now();
+  p.firstMs = p.firstAt - p.start;
 }
 
 /** The step whose prediction is drawn at `step`: that one, or in live mode the forecast some steps ahead of it. */
@@ -101,6 +100,7 @@ function drawFrames() {
     const heat = state.wasm.heatMap(p.sigma.subarray(at * px, (at + 1) * px), p.maxSigma);
     ui.sigmaMap.getContext("2d").putImageData(screenBlend(mean, heat), 0, 0);
     ui.sigmaScale.textContent = p.maxSigma.toFixed(3);
+    log("drawn", { id: p.id, step: at });
   } else {
     clearFrame(ui.framePred);
     clearFrame(ui.sigmaMap);

@@ -2,10 +2,11 @@
 // and the sequence shown to the model under the mode.
 
 import { IMAGE_SIZE } from "./config.js";
-import { drawTableMap, show } from "./draw.js";
+import { drawTableMap } from "./draw.js";
+import { log, timings } from "./hooks.js";
 import { describe } from "./imitate.js";
 import { chooseRandom, clampInt, mulberry32, updateObsInfo } from "./observations.js";
-import { play } from "./playback.js";
+import { play, show } from "./playback.js";
 import { cancelPrediction } from "./prediction.js";
 import { state } from "./state.js";
 import { clearError, showError } from "./status.js";
@@ -63,7 +64,8 @@ export function setEpisode(ep, { action, seed, placed, ms, folder }) {
     ms,
   };
   state.episode = episode;
-  state.timings.episode_ms = ms;
+  timings.episode_ms = ms;
+  log("episode", { digest: episode.digest });
   ui.simControls.hidden = Boolean(folder);
   ui.freezeFrom.max = ui.freezeTo.max = String(len);
   if (!(Number(ui.freezeTo.value) > 0) || Number(ui.freezeTo.value) > len) ui.freezeTo.value = String(len);

@@ -1,7 +1,36 @@
 // The live error plot: the error of each forecast of the rest of the action against the fraction
-// of the action seen when it was made, one line per model (joint RMSE and image MSE side by side).
+// of the action seen when it was made, one line per model (joint RMSE and image MSE side by side);
+// and the curves it shows, those of the episode on screen (live.js adds their points).
 
-import { fit, MUTED, panelFrame } from "./views.js";
+import { MODEL_NAMES } from "./config.js";
+import { errorPlotHolds } from "./hooks.js";
+import { heldForecast, state } from "./state.js";
+import { ui } from "./ui.js";
+import { cssSize, fit, MUTED, panelFrame } from "./views.js";
+
+/** The error curves of the episode on screen under the current rule and modalities (model → points). */
+export function curves() {
+  const key = [state.episode?.digest, state.every, ui.observe.value, state.shown?.len].join("|");
+  if (state.curves.key !== key) state.curves = { key, byModel: new Map(), version: 0 };
+  return state.curves.byModel;
+}
+
+/** What the error plot was last drawn from: it is redrawn only when that changes. */
+let errorsDrawnFrom = "";
+
+/** Draws the error plot, the fraction of the action seen by the forecast on screen marked. */
+export function redrawErrors() {
+  const { shown } = state;
+  if (!shown) return;
+  const forecast = heldForecast();
+  const now = forecast ? forecast.from / shown.len : null;
+  const byModel = curves();
+  const { w, h } = cssSize(ui.errorPlot);
+  const key = [window.devicePixelRatio, w, h, state.curves.key, state.curves.version, now].join("|");
+  if (key === errorsDrawnFrom) return;
+  errorsDrawnFrom = key;
+  drawErrors(ui.errorPlot, byModel, MODEL_NAMES, now);
+}
 
 /** A colour per model id (the page's MODELS). */
 export const MODEL_COLORS = { attn: "#4dabf7", dmbn: "#ff6b6b", pte: "#69db7c", "pte-aug": "#ffd43b", "attn-2020": "#4dabf7", "pte-2020": "#69db7c", "dmbn-2020": "#ff6b6b", "pte-aug-2020": "#ffd43b" };
@@ -19,8 +48,7 @@ const GAP = 18;
 export function drawErrors(canvas, byModel, names, now) {
   const { g, w, h } = fit(canvas);
   const cw = (w - GAP) / 2;
-  canvas.dataset.models = [...byModel.keys()].join(",");
-  canvas.dataset.points = String([...byModel.values()].reduce((n, points) => n + points.length, 0));
+  errorPlotHolds(canvas, byModel);
   PANELS.forEach((panel, i) => drawPanel(g, { x: i * (cw + GAP), y: 0, w: cw, h }, panel, byModel, now));
   // Legend: the models with a curve, left to right under the panels.
   g.font = "11px system-ui, sans-serif";

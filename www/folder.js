@@ -3,10 +3,10 @@
 // errors are the reader's, naming the file inside the folder; the page only hands over the bytes.
 // Nothing is uploaded. The folder's sequences join the Sequence select.
 
+import { invalidate } from "./changes.js";
 import { IMAGE_SIZE, modelsOf } from "./config.js";
 import { generate, setEpisode } from "./episodes.js";
 import { loadModel, offerModels } from "./models.js";
-import { invalidate } from "./prediction.js";
 import { state } from "./state.js";
 import { setState, showError } from "./status.js";
 import { ui } from "./ui.js";

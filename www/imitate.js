@@ -4,15 +4,13 @@
 // frames are drawn beside the demonstration's, step for step (draw.js), and its outcome —
 // judged in Rust against the demonstration — in a badge.
 
+import { performanceDone, performed, timings } from "./hooks.js";
 import { state } from "./state.js";
 import { showError } from "./status.js";
 import { ui } from "./ui.js";
 
 /** What the model saw of the observed steps, by the `#observe` value. */
 const SEEN = { both: "frames and joints", images: "frames only", joints: "joints only" };
-
-/** Counts performances, a hook that automation can wait on (`body.dataset.performances`). */
-let performances = 0;
 
 /**
  * Whether the arm can perform the episode on screen: a simulator episode, or a folder of
@@ -89,14 +87,14 @@ function perform(source, enactment) {
   };
   episode.free();
   imitation.free();
-  state.timings.imitation = {
+  timings.imitation = {
     source,
     success: result.outcome.success,
     summary: result.outcome.summary,
     joint_rmse: result.jointRmse,
     ms: result.ms,
   };
-  document.body.dataset.performances = String(++performances);
+  performanceDone();
   return result;
 }
 
@@ -109,9 +107,7 @@ function show(performance) {
 /** The badge, the button and the note of the imitate panel (entering the mode: episodes.js). */
 export function describe() {
   const p = state.performance;
-  const { body } = document;
-  body.dataset.performed = p?.source ?? "";
-  body.dataset.outcome = p ? (p.outcome.success ? "success" : "missed") : "";
+  performed(p);
   ui.outcome.textContent = p ? p.outcome.summary : "no performance yet";
   ui.outcome.className = `outcome ${p ? (p.outcome.success ? "success" : "missed") : ""}`;
   ui.replay.textContent =

@@ -1,24 +1,20 @@
 // Live mode: the episode plays, the steps seen so far (every k-th, the observation rule) are the
 // observations, and the unseen rest of the action is forecast again each time they change; each
-// finished forecast's error joins the live error plot.
+// finished forecast's error joins the live error plot. Comparing the models makes the same
+// forecasts (prediction.js) for every model and observation point, without drawing them.
 
-import { BLENDS, CHUNK, MODEL_NAMES } from "./config.js";
+import { CHUNK, MODEL_NAMES } from "./config.js";
 import { render, shownStep } from "./draw.js";
-import { drawErrors } from "./error_plot.js";
+import { curves, redrawErrors } from "./error_plot.js";
+import { comparisonEnded, seen, timings } from "./hooks.js";
 import { loadModel } from "./models.js";
 import { clampInt, updateObsInfo } from "./observations.js";
 import { pause } from "./playback.js";
 import { JOINTS } from "./plot.js";
-import { cancelPrediction, observations, predict } from "./prediction.js";
+import { ask, cancelPrediction, predict, prediction } from "./prediction.js";
 import { state } from "./state.js";
 import { settle, showError } from "./status.js";
 import { ui } from "./ui.js";
-import { cssSize } from "./views.js";
-
-/** The observation rule: observe every `every`-th step. */
-export function every() {
-  return state.every;
-}
 
 /**
  * The rule's field changed (or was set from the URL): its value becomes the rule. Read only
@@ -30,7 +26,7 @@ export function takeRule() {
 }
 
 /** The steps the rule has observed once `step` is reached: 0, k, 2k, … ≤ step. */
-export function seenSteps(step, k = every()) {
+export function seenSteps(step, k = state.every) {
   const steps = [];
   for (let s = 0; s <= step; s += k) steps.push(s);
   return steps;
@@ -62,18 +58,11 @@ export function forecastNow(step = state.step) {
   state.seenKey = key;
   updateObsInfo();
   const from = steps[steps.length - 1] + 1;
-  document.body.dataset.seen = String(from);
+  seen(from);
   // Everything observed: the last forecast stays on screen.
   if (from >= shown.len) return render();
   // The step on screen (some steps ahead) is decoded first, alone.
   predict({ from, chunk: CHUNK, first: shownStep(step), keepEncoded: true });
-}
-
-/** The error curves of the episode on screen under the current rule and modalities. */
-function curves() {
-  const key = [state.episode?.digest, every(), ui.observe.value, state.shown?.len].join("|");
-  if (state.curves.key !== key) state.curves = { key, byModel: new Map(), version: 0 };
-  return state.curves.byModel;
 }
 
 /** Adds a forecast's error at `from` (steps seen) to `model`'s curve and redraws the plot. */
@@ -87,43 +76,20 @@ function record(model, from, error) {
   redrawErrors();
 }
 
-/** What the error plot was last drawn from: it is redrawn only when that changes. */
-let errorsDrawnFrom = "";
-
-/** Draws the error plot, the fraction of the action seen by the forecast on screen marked. */
-export function redrawErrors() {
-  const { shown } = state;
-  if (!shown) return;
-  const forecast = heldForecast();
-  const now = forecast ? forecast.from / shown.len : null;
-  const byModel = curves();
-  const { w, h } = cssSize(ui.errorPlot);
-  const key = [window.devicePixelRatio, w, h, state.curves.key, state.curves.version, now].join("|");
-  if (key === errorsDrawnFrom) return;
-  errorsDrawnFrom = key;
-  drawErrors(ui.errorPlot, byModel, MODEL_NAMES, now);
-}
-
-/** Live mode: the last finished forecast of the sequence on screen (see `state.forecast`), or null. */
-export function heldForecast() {
-  const { shown, forecast } = state;
-  return shown?.mode === "live" && forecast?.sequence === shown ? forecast : null;
-}
-
-/** The benchmark's error of a forecast of the steps from `from` on (RGB bytes, joints). */
-function forecastError(from, mean, jointMean) {
-  const { shown } = state;
+/** The benchmark's error of forecast `p` over the steps it predicted (RGB bytes, joints). */
+function forecastError(p) {
+  const { sequence: shown, from } = p;
   const px = shown.size * shown.size * 3;
-  return state.wasm.forecastError(shown.frames.subarray(from * px), shown.joints.subarray(from * JOINTS), mean, jointMean);
+  const truth = [shown.frames.subarray(from * px), shown.joints.subarray(from * JOINTS)];
+  return state.wasm.forecastError(...truth, p.mean.subarray(from * px), p.jointMean.subarray(from * JOINTS));
 }
 
-/** A live forecast finished (prediction.js): its error, for the plot and for automation. */
+/** A live forecast finished (prediction.js, through main.js): its error, for the plot and for automation. */
 export function forecastDone(p) {
   // Timed to its last chunk (p.doneAt): its error below is for the plot.
-  const px = p.size * p.size * 3;
-  const error = forecastError(p.from, p.mean.subarray(p.from * px), p.jointMean.subarray(p.from * JOINTS));
+  const error = forecastError(p);
   record(p.model, p.from, error);
-  state.timings.live.push({
+  timings.live.push({
     model: p.model,
     from: p.from,
     steps: p.len - p.from,
@@ -152,8 +118,8 @@ function stopComparing() {
 
 /**
  * Every model's whole curve on this episode: the forecast from each observation point of the
- * rule, one model after another, without drawing the forecasts. Playback pauses; a step change
- * or a new episode stops it.
+ * rule, one model after another, made as live mode makes them (prediction.js) but not drawn.
+ * Playback pauses; a step change or a new episode stops it.
  */
 export async function compareModels() {
   if (state.comparing) return stopComparing();
@@ -172,8 +138,7 @@ export async function compareModels() {
   state.comparing = run;
   ui.compare.textContent = "stop comparing";
   const points = seenSteps(shown.len - 2);
-  const blend = BLENDS[ui.observe.value];
-  const px = shown.size * shown.size * 3;
+  const observe = ui.observe.value;
   try {
     for (const model of [...ui.model.options].map((o) => o.value)) {
       await loadModel(model);
@@ -181,21 +146,12 @@ export async function compareModels() {
         if (stopped) return;
         ui.compareInfo.textContent = `${MODEL_NAMES[model]}: ${i + 1} / ${points.length}`;
         const from = last + 1;
-        const n = shown.len - from;
-        const mean = new Uint8Array(n * px);
-        const jointMean = new Float32Array(n * JOINTS);
-        const steps = seenSteps(last);
-        const { frames, joints, times } = observations(steps);
-        const targets = Float32Array.from(shown.times.subarray(from));
-        const chunk = Math.ceil(n / state.inference.count);
-        const request = { model, frames, joints, times, targets, blend, chunk, delay: 0, source: shown.id, steps };
-        running = state.inference.predict(request, (c) => {
-          mean.set(c.mean, c.start * px);
-          jointMean.set(c.jointMean, c.start * JOINTS);
-        });
-        const reply = await running.done;
+        // Nothing waits on the first step: the rest spread evenly over the workers.
+        const chunk = Math.ceil((shown.len - from) / state.inference.count);
+        running = prediction({ model, observe, steps: seenSteps(last), from, chunk, shown });
+        const reply = await ask(running, { keepEncoded: true, delay: 0 });
         if (stopped || reply.type !== "done") return;
-        record(model, from, forecastError(from, mean, jointMean));
+        record(model, from, forecastError(running));
       }
     }
   } catch (err) {
@@ -205,7 +161,7 @@ export async function compareModels() {
       state.comparing = null;
       ui.compare.textContent = "compare models";
       ui.compareInfo.textContent = "";
-      document.body.dataset.compared = String(Number(document.body.dataset.compared ?? 0) + 1);
+      comparisonEnded();
       forecastNow();
       settle();
     }

@@ -1,10 +1,16 @@
-// The page's entry: starts WebAssembly and the workers, then the first episode and the chosen model.
+// The page's entry: connects what flows up the layers, starts WebAssembly and the workers, then
+// the first episode and the chosen model.
 
+import { observationsChanged } from "./changes.js";
 import { MODEL_NAMES, WORKERS } from "./config.js";
 import { generate } from "./episodes.js";
+import { on } from "./events.js";
+import { expose, started, timings } from "./hooks.js";
+import { clearPerformances, performImagined } from "./imitate.js";
 import { Inference } from "./inference.js";
-import { takeRule } from "./live.js";
+import { follow, forecastDone, takeRule } from "./live.js";
 import { selectModel } from "./models.js";
+import { pause } from "./playback.js";
 import { predict, timePrediction } from "./prediction.js";
 import { state } from "./state.js";
 import { failFatal, setState, settle } from "./status.js";
@@ -12,10 +18,19 @@ import { ui } from "./ui.js";
 import { readUrl } from "./url.js";
 import { heatGradient } from "./views.js";
 import { checkSupport, loadWasm } from "./wasm.js";
-import { observationsChanged, wire } from "./wire.js";
+import { wire } from "./wire.js";
+
+// The lower layers announce, the modes above act (events.js).
+on("step", follow);
+on("predicted", (p) => {
+  if (p.mode === "live") forecastDone(p);
+  if (p.mode === "imitate") performImagined(p);
+});
+on("dropped", clearPerformances);
+on("fatal", pause);
 
 async function main() {
-  window.dmbnStarted = true;
+  started();
   setState("loading");
   wire();
   const place = readUrl();
@@ -27,7 +42,7 @@ async function main() {
     const { glue, module } = await loadWasm();
     state.wasm = glue;
     ui.heatLegend.style.background = heatGradient(glue.heatMap);
-    state.timings.wasm_ms = performance.now() - t0;
+    timings.wasm_ms = performance.now() - t0;
     state.inference = new Inference(module, WORKERS);
   } catch (err) {
     ui.status.textContent = "";
@@ -35,7 +50,7 @@ async function main() {
     return;
   }
   // forgetEncodings: the workers encode every observation again (bench/page.mjs).
-  window.dmbn = { timePrediction, predict: () => predict(), forgetEncodings: () => state.inference.forget() };
+  expose({ timePrediction, predict: () => predict(), forgetEncodings: () => state.inference.forget() });
   // The chosen model loads in the worker while the episode is simulated here.
   const modelReady = selectModel();
   // Simulating blocks this thread for a moment: first let the worker start (its start needs
@@ -55,7 +70,7 @@ async function main() {
   // (The weights may be in already: then selectModel has described them.)
   if (!state.loadedModels.has(ui.model.value)) ui.status.textContent = `Loading the ${MODEL_NAMES[ui.model.value]} weights…`;
   if (await modelReady) {
-    state.timings.ready_ms = performance.now();
+    timings.ready_ms = performance.now();
     settle();
   }
 }

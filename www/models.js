@@ -1,12 +1,15 @@
 // The models' weights: loading each once into the workers, and the status line describing them.
 
 import { IMAGE_SIZE, KIND_NAMES, MODEL_NAMES, MODELS, modelsOf, WEIGHTS } from "./config.js";
+import { timings } from "./hooks.js";
 import { state } from "./state.js";
 import { clearError, setState, showError } from "./status.js";
 import { ui } from "./ui.js";
 
 /** Model id → promise of the workers' report on its weights; a failure is dropped, to retry. */
 const requests = new Map();
+/** Model id → the first worker's report on its weights, once loaded. */
+const reports = new Map();
 
 /** Loads model `id` (a key of MODELS) into the workers once; resolves with the first worker's report. */
 export function loadModel(id) {
@@ -18,7 +21,8 @@ export function loadModel(id) {
           `The ${MODEL_NAMES[id]} weights (${WEIGHTS[id]}) are for ${info.imageSize}×${info.imageSize} frames; this page simulates ${IMAGE_SIZE}×${IMAGE_SIZE}.`,
         );
       }
-      state.timings.models[id] = info;
+      reports.set(id, info);
+      timings.models[id] = info;
       state.loadedModels.add(id);
       return info;
     });
@@ -30,7 +34,7 @@ export function loadModel(id) {
 }
 
 function describeModel(id) {
-  const info = state.timings.models[id];
+  const info = reports.get(id);
   if (!info) return "";
   const file = decodeURIComponent(new URL(WEIGHTS[id]).pathname.split("/").pop());
   // The file should hold the kind of model the id names (pte-aug: a DMBN-PTE).

@@ -1,6 +1,5 @@
 // The observed steps: choosing them (first k, random k) and listing them.
 
-import { every } from "./live.js";
 import { state } from "./state.js";
 import { ui } from "./ui.js";
 
@@ -46,7 +45,7 @@ export function updateObsInfo() {
   for (const el of [ui.k, ui.firstK, ui.randomK, ui.clearObs]) el.disabled = state.fatal || live;
   ui.predict.textContent = live ? "Forecast" : "Predict";
   if (live) {
-    ui.obsInfo.textContent = `live: the ${steps.length} step${steps.length > 1 ? "s" : ""} seen so far, every ${every()}: ${steps.length > 12 ? `…, ${steps.slice(-12).join(", ")}` : steps.join(", ")}`;
+    ui.obsInfo.textContent = `live: the ${steps.length} step${steps.length > 1 ? "s" : ""} seen so far, every ${state.every}: ${steps.length > 12 ? `…, ${steps.slice(-12).join(", ")}` : steps.join(", ")}`;
     ui.predict.disabled = state.fatal;
     return;
   }

@@ -1,9 +1,23 @@
-// Playback of the shown sequence at real time, one animation frame at a time.
+// The step on screen: showing one, and playing the shown sequence at real time, one animation
+// frame at a time.
 
 import { STEPS_PER_SECOND } from "./config.js";
-import { show } from "./draw.js";
+import { render } from "./draw.js";
+import { emit } from "./events.js";
+import { log } from "./hooks.js";
 import { state } from "./state.js";
 import { ui } from "./ui.js";
+
+/** Shows step `k` (clamped to the shown sequence). */
+export function show(k) {
+  if (!state.shown) return;
+  state.step = Math.max(0, Math.min(state.shown.len - 1, k));
+  ui.scrubber.value = String(state.step);
+  log("step", { step: state.step });
+  // Live mode forecasts from what this step has seen, before it is drawn (main.js connects it).
+  emit("step", state.step);
+  render();
+}
 
 export function play() {
   if (!state.shown) return;

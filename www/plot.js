@@ -1,6 +1,7 @@
 // The 7 joint curves as small multiples on one canvas: the true (shown) values, the predicted
 // mean with its ±2σ band as far as the prediction has come, the observed points and a cursor.
 
+import { plotColumns } from "./hooks.js";
 import { cssSize, fit, MUTED, panelFrame } from "./views.js";
 
 export const JOINTS = 7;
@@ -34,7 +35,7 @@ export function drawJoints(canvas, cursor, data) {
   const { w, h } = cssSize(canvas);
   const cols = w < NARROW ? NARROW_COLS : COLS;
   const rows = Math.ceil((JOINTS + 1) / cols);
-  canvas.dataset.columns = String(cols);
+  plotColumns(canvas, cols);
   const cw = (w - GAP.x * (cols - 1)) / cols;
   const ch = (h - GAP.y * (rows - 1)) / rows;
   const cells = [];

@@ -1,9 +1,11 @@
-// Predicting the shown sequence: the request, its chunks as they come, cancelling, timings.
+// Predictions of the shown sequence. Every one the page makes — Predict, live mode's forecasts,
+// the model comparison — is made by `prediction` and asked of the workers by `ask`, which stores
+// its chunks as they come; `predict` makes the one on screen, draws it and times it.
 
 import { BLENDS, CHUNK, CHUNK_DELAY, MODEL_NAMES, MODELS } from "./config.js";
-import { render, renderSoon, shownStep } from "./draw.js";
-import { clearPerformances, performImagined } from "./imitate.js";
-import { forecastDone, forecastNow } from "./live.js";
+import { firstDrawn, render, renderSoon, shownStep } from "./draw.js";
+import { emit } from "./events.js";
+import { log, predictionFinished, progress, timings } from "./hooks.js";
 import { loadModel, selectModel } from "./models.js";
 import { observedSteps } from "./observations.js";
 import { JOINTS } from "./plot.js";
@@ -15,27 +17,12 @@ export function cancelPrediction() {
   if (state.prediction && !state.prediction.complete) state.prediction.cancel?.();
   state.prediction = null;
   ui.predLabel.textContent = "";
-  clearPerformances();
+  // Imitate mode: no performance is current any more (main.js connects it).
+  emit("dropped");
 }
 
-/** Settings changed: predict again when live, otherwise drop the outdated prediction. */
-export function invalidate() {
-  if (state.shown?.mode === "live") {
-    forecastNow();
-    return;
-  }
-  if (state.live && state.episode && state.observed.size) {
-    predict();
-  } else {
-    cancelPrediction();
-    render();
-    settle();
-  }
-}
-
-/** The shown sequence's frames, joints and time stamps at `steps`, as the model takes them. */
-export function observations(steps) {
-  const { shown } = state;
+/** The frames, joints and time stamps of sequence `shown` at `steps`, as the model takes them. */
+export function observations(steps, shown = state.shown) {
   const px = shown.size * shown.size * 3;
   const frames = new Uint8Array(steps.length * px);
   const joints = new Float32Array(steps.length * JOINTS);
@@ -48,36 +35,22 @@ export function observations(steps) {
   return { frames, joints, times };
 }
 
+/** Numbers the predictions (their `id` in the event log). */
+let made = 0;
+
 /**
- * Predicts the steps of the shown sequence from `from` on (every step by default; live mode's
- * forecast: the unseen rest) from the observed ones, drawing the chunks of `chunk` steps as they
- * come (at most once an animation frame). Live mode's options: `first`, a step decoded alone
- * before the others (the one on screen) and drawn at once, the rest drawn when complete;
- * `keepEncoded`, the workers keep the observations encoded per step of the shown sequence and
- * encode only the new ones.
+ * A prediction of the shown sequence's steps from `from` on (every step by default; live mode:
+ * the unseen rest) by `model` from the observed `steps` under the modalities `observe`, in
+ * chunks of `chunk` steps; `first`: a step decoded alone before the others. Not asked yet (`ask`).
  */
-export async function predict({ from = 0, chunk = CHUNK, first = null, keepEncoded = false } = {}) {
-  const { shown } = state;
-  if (state.fatal || !state.episode || !shown) return;
-  const steps = observedSteps();
-  if (!steps.length) {
-    showError("Choose at least one observation: click frames on the timeline, or use “first k” / “random k”.");
-    return;
-  }
-  state.live = true;
-  cancelPrediction();
-  const model = ui.model.value;
-  const observe = ui.observe.value;
-  const size = shown.size;
+export function prediction({ model, observe, steps, from = 0, chunk = CHUNK, first = null, shown = state.shown }) {
+  const { len, size } = shown;
   const px = size * size;
-  const { frames, joints, times } = observations(steps);
-  const len = shown.len;
-  // The steps in the order they are decoded (`first` first), and their time stamps (permuted
-  // for p): the targets.
+  // The steps in the order they are decoded (`first` first).
   const order = Int32Array.from({ length: len - from }, (_, i) => from + i);
   if (first !== null && first > from && first < len) order.copyWithin(1, 0, first - from).fill(first, 0, 1);
-  const targets = Float32Array.from(order, (k) => shown.times[k]);
-  const p = {
+  return {
+    id: ++made,
     model,
     mode: shown.mode,
     observe,
@@ -103,12 +76,87 @@ export async function predict({ from = 0, chunk = CHUNK, first = null, keepEncod
     asked: performance.now(),
     chunks: [],
   };
+}
+
+/**
+ * Asks the workers for prediction `p`: each chunk is stored in it as it comes, then passed to
+ * `onChunk`. `keepEncoded`: the workers keep the observations encoded per step of the sequence
+ * and encode only the new ones; `delay`: a pause between chunks (`?chunkDelay`). Sets
+ * `p.cancel`; resolves with the workers' reply ({type: "done" | "cancelled", ms, encodeMs, …}).
+ */
+export function ask(p, { keepEncoded = false, delay = CHUNK_DELAY, onChunk = () => {} } = {}) {
+  const { model, observe, first, steps, sequence } = p;
+  const { frames, joints, times } = observations(steps, sequence);
+  // The targets: the time stamps of the steps in decoding order (permuted for p).
+  const targets = Float32Array.from(p.order, (k) => sequence.times[k]);
+  const request = { model, frames, joints, times, targets, blend: BLENDS[observe], chunk: p.chunk, delay, firstAlone: first !== null };
+  if (keepEncoded) Object.assign(request, { source: sequence.id, steps });
+  p.start = performance.now();
+  log("start", { id: p.id, mode: p.mode, model, from: p.from });
+  const run = state.inference.predict(request, (c) => {
+    store(p, c);
+    onChunk(c);
+  });
+  // The event log says how each prediction ended, once.
+  let ended = false;
+  const end = (how) => {
+    if (ended) return false;
+    ended = true;
+    log(how, { id: p.id, from: p.from });
+    return true;
+  };
+  p.cancel = () => end("cancelled") && run.cancel();
+  return run.done.then(
+    (reply) => {
+      if (reply.type === "done") end("finished");
+      return reply;
+    },
+    (err) => {
+      end("failed");
+      throw err;
+    },
+  );
+}
+
+/** A chunk of targets `c.start`… (indices into `p.order`) came: its steps are kept in `p`. */
+function store(p, c) {
+  const px = p.size * p.size;
+  for (let i = 0; i < c.count; i++) {
+    const k = p.order[c.start + i];
+    p.mean.set(c.mean.subarray(i * px * 3, (i + 1) * px * 3), k * px * 3);
+    p.sigma.set(c.sigma.subarray(i * px, (i + 1) * px), k * px);
+    p.jointMean.set(c.jointMean.subarray(i * JOINTS, (i + 1) * JOINTS), k * JOINTS);
+    p.jointSigma.set(c.jointSigma.subarray(i * JOINTS, (i + 1) * JOINTS), k * JOINTS);
+    p.done[k] = 1;
+  }
+  p.maxSigma = Math.max(p.maxSigma, c.maxSigma);
+  p.count += c.count;
+  p.chunks.push(c.ms);
+  log("chunk", { id: p.id, count: c.count });
+}
+
+/**
+ * Predicts the steps of the shown sequence from `from` on (see `prediction`) from the observed
+ * ones, as the prediction on screen, drawing its chunks as they come (at most once an animation
+ * frame). Live mode's options: `first`, the step on screen, drawn at once, the rest drawn when
+ * complete; `keepEncoded` (see `ask`).
+ */
+export async function predict({ from = 0, chunk = CHUNK, first = null, keepEncoded = false } = {}) {
+  if (state.fatal || !state.episode || !state.shown) return;
+  const steps = observedSteps();
+  if (!steps.length) {
+    showError("Choose at least one observation: click frames on the timeline, or use “first k” / “random k”.");
+    return;
+  }
+  state.live = true;
+  cancelPrediction();
+  const p = prediction({ model: ui.model.value, observe: ui.observe.value, steps, from, chunk, first });
   state.prediction = p;
   setState("predicting");
   ui.predLabel.textContent = "predicting…";
   // A loaded model is asked at once: awaiting it would post the request only after the
   // caller's drawing (a live forecast's latency). selectModel still updates the status line.
-  if (state.loadedModels.has(model)) {
+  if (state.loadedModels.has(p.model)) {
     selectModel();
   } else if (!(await selectModel())) {
     if (state.prediction === p) state.prediction = null;
@@ -116,16 +164,10 @@ export async function predict({ from = 0, chunk = CHUNK, first = null, keepEncod
   }
   if (state.prediction !== p) return;
   setState("predicting");
-  document.body.dataset.progress = "0";
-  p.start = performance.now();
-  const run = state.inference.predict(
-    { model, frames, joints, times, targets, blend: BLENDS[observe], chunk, delay: CHUNK_DELAY, firstAlone: first !== null, ...(keepEncoded && { source: shown.id, steps }) },
-    (c) => receiveChunk(p, c),
-  );
-  p.cancel = run.cancel;
+  progress(0);
   let reply;
   try {
-    reply = await run.done;
+    reply = await ask(p, { keepEncoded, onChunk: (c) => received(p, c) });
   } catch (err) {
     if (state.prediction === p) {
       state.prediction = null;
@@ -138,25 +180,10 @@ export async function predict({ from = 0, chunk = CHUNK, first = null, keepEncod
   finish(p, reply);
 }
 
-/** A chunk of targets `c.start`… (indices into `p.order`) came: its steps are kept and drawn. */
-function receiveChunk(p, c) {
+/** A chunk of the prediction on screen came (stored by `ask`): it is drawn. */
+function received(p, c) {
   if (state.prediction !== p) return;
-  const px = p.size * p.size;
-  let shown = false;
-  const at = shownStep();
-  for (let i = 0; i < c.count; i++) {
-    const k = p.order[c.start + i];
-    p.mean.set(c.mean.subarray(i * px * 3, (i + 1) * px * 3), k * px * 3);
-    p.sigma.set(c.sigma.subarray(i * px, (i + 1) * px), k * px);
-    p.jointMean.set(c.jointMean.subarray(i * JOINTS, (i + 1) * JOINTS), k * JOINTS);
-    p.jointSigma.set(c.jointSigma.subarray(i * JOINTS, (i + 1) * JOINTS), k * JOINTS);
-    p.done[k] = 1;
-    shown ||= k === at;
-  }
-  p.maxSigma = Math.max(p.maxSigma, c.maxSigma);
-  p.count += c.count;
-  p.chunks.push(c.ms);
-  document.body.dataset.progress = String(p.count);
+  progress(p.count);
   if (p.mode !== "live") {
     const steps = p.len - p.from;
     ui.predLabel.textContent = `predicting… ${p.count} / ${steps}`;
@@ -166,14 +193,10 @@ function receiveChunk(p, c) {
   }
   // A live forecast (about 100 ms) shows no progress: its frames are drawn at its first chunk
   // and the step on screen (`first`, decoded alone first), everything when complete (finish).
+  const at = shownStep();
+  let shown = false;
+  for (let i = 0; i < c.count; i++) shown ||= p.order[c.start + i] === at;
   if (p.count === c.count || shown) renderSoon({ framesOnly: true });
-}
-
-/** The prediction's first steps are drawn (draw.js): when, for its timings. */
-export function firstDrawn(p) {
-  if (p.firstAt !== undefined) return;
-  p.firstAt = performance.now();
-  p.firstMs = p.firstAt - p.start;
 }
 
 /** A prediction is complete: its timings, for the page and for automation. */
@@ -189,12 +212,12 @@ function finish(p, reply) {
   p.encodeMs = reply.encodeMs;
   p.workerMs = reply.ms;
   p.encoded = reply.encoded;
-  if (mode === "live") forecastDone(p);
-  // Imitate mode: the arm performs the joints imagined (before the counter below moves).
-  if (mode === "imitate") performImagined(p);
+  // Live mode: its error joins the plot; imitate mode: the arm performs the joints imagined
+  // (main.js connects them). Before the counter below moves.
+  emit("predicted", p);
   // A counter that automation can wait on: it changes with every finished prediction.
-  document.body.dataset.predictions = String(Number(document.body.dataset.predictions ?? 0) + 1);
-  state.timings.prediction = {
+  predictionFinished();
+  timings.prediction = {
     model,
     mode,
     observe,

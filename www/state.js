@@ -1,4 +1,4 @@
-// The page's mutable state, in one object that every module reads and writes.
+// The page's mutable state, in one object that the modules above read and write.
 
 export const state = {
   /** The wasm-bindgen glue, initialised on the main thread (the simulator). */
@@ -24,7 +24,7 @@ export const state = {
    * and compositor from the inference workers).
    */
   forecast: null,
-  /** Live mode: the observation rule, every k-th step (taken from its field on change: live.js). */
+  /** Live mode: the observation rule, every k-th step (taken from its field on change: live.js `takeRule`). */
   every: 10,
   /** Live mode: the seen observations the forecast on screen was made from ("0,5,10"). */
   seenKey: "",
@@ -54,6 +54,10 @@ export const state = {
   stepAt: () => 0,
   timelineAt: () => -1,
   tableAt: () => null,
-  /** Numbers for automation and the page benchmark (bench/page.mjs). */
-  timings: (window.dmbnTimings = { models: {}, prediction: null, live: [] }),
 };
+
+/** Live mode: the last finished forecast of the sequence on screen (see `state.forecast`), or null. */
+export function heldForecast() {
+  const { shown, forecast } = state;
+  return shown?.mode === "live" && forecast?.sequence === shown ? forecast : null;
+}

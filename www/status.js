@@ -1,11 +1,12 @@
 // The page's state badge (`body[data-state]`), the error banner and fatal failures.
 
-import { pause } from "./playback.js";
+import { emit } from "./events.js";
+import { pageState } from "./hooks.js";
 import { state } from "./state.js";
 import { ui } from "./ui.js";
 
 export function setState(name) {
-  document.body.dataset.state = name;
+  pageState(name);
   ui.badge.textContent = name;
 }
 
@@ -28,7 +29,8 @@ export function clearError() {
 /** A failure the page cannot recover from: the error stays and every control is disabled. */
 export function failFatal(err) {
   state.fatal = true;
-  pause();
+  // (Playback stops: main.js connects it.)
+  emit("fatal", err);
   for (const el of document.querySelectorAll("#controls button, #controls select, #controls input, .transport button, .transport input")) {
     el.disabled = true;
   }

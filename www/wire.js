@@ -1,26 +1,21 @@
 // The controls, pointer and keys: what each input changes.
 
-import { drawTableMap, render, show, sigmaOverlay } from "./draw.js";
+import { invalidate, observationsChanged } from "./changes.js";
+import { drawTableMap, render, sigmaOverlay } from "./draw.js";
 import { buildShown, generate } from "./episodes.js";
+import { redrawErrors } from "./error_plot.js";
 import { droppedFiles, openFolder, pickedFiles, sequenceChosen } from "./folder.js";
+import { toggleDemonstration } from "./imitate.js";
+import { compareModels, forecastNow, takeRule } from "./live.js";
 import { selectModel } from "./models.js";
 import { chooseFirst, chooseRandom, updateObsInfo } from "./observations.js";
-import { pause, play, toggle } from "./playback.js";
-import { toggleDemonstration } from "./imitate.js";
-import { compareModels, forecastNow, redrawErrors, takeRule } from "./live.js";
-import { cancelPrediction, invalidate, predict } from "./prediction.js";
+import { pause, play, show, toggle } from "./playback.js";
+import { cancelPrediction, predict } from "./prediction.js";
 import { state } from "./state.js";
 import { clearError, settle } from "./status.js";
 import { ui } from "./ui.js";
 import { writeUrl } from "./url.js";
 import { watchSize } from "./views.js";
-
-/** The observed steps changed: list them, link them, and predict again when live. */
-export function observationsChanged() {
-  updateObsInfo();
-  writeUrl();
-  invalidate();
-}
 
 function toggleObserved(k) {
   if (k < 0 || !state.shown) return;

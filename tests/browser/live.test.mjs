@@ -177,10 +177,10 @@ describe("live mode", () => {
     assert.equal(await page.inputValue("#ahead"), "5");
     assert.equal(await page.isChecked("#ghost"), false);
     // A value being typed is not the rule yet: a forecast that finishes meanwhile is made and
-    // plotted under the old rule, and the new rule's curve starts empty. (The forecast of the
-    // steps played before the pause finishes first: counted after it, it is not taken for the
-    // one from step 25.)
-    await page.waitForFunction(() => ["predicted", "error"].includes(document.body.dataset.state));
+    // plotted under the old rule, and the new rule's curve starts empty. (First step 0's
+    // forecast, finished: wherever playback paused, step 25 then sees new steps, and the
+    // forecast counted next is the one from there.)
+    assert.equal((await forecastAt(page, 0)).from, 1);
     const finished = await forecasts(page);
     await page.locator("#scrubber").fill("25");
     await page.fill("#live-every", "8");
