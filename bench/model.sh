@@ -5,7 +5,7 @@
 #   - burn wasm (node):     bench/model.mjs (simd128, shipped weights; the 100 steps on one
 #                           thread and split over THREADS workers, as the page runs them)
 # then prints the medians and the ratios the README quotes, and checks that the PyTorch twin
-# (python/dmbn_torch.py) loaded from every exported shipped model predicts what `dmbn predict`
+# (python/dmbn_torch/) loaded from every exported shipped model predicts what `dmbn predict`
 # does (tests/exchange.rs, within 1e-4). Sets up a venv with torch in
 # $HOME/.cache/dmbn/venv on first use (pip; about 1-3 GB).
 #

@@ -1,4 +1,4 @@
-"""DMBN in PyTorch (python/dmbn_torch.py, the twin of crate/model), timed on the same shapes as
+"""DMBN in PyTorch (python/dmbn_torch/, the twin of crate/model), timed on the same shapes as
 `cargo bench --bench model`: a training step (Gaussian NLL, Adam with gradient clipping) and
 inference of one and of 100 target times.
 

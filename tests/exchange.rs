@@ -1,6 +1,6 @@
 //! Weights for PyTorch: `dmbn export` / `dmbn import` (safetensors) round trips, the names and
 //! layouts PyTorch sees, clear errors for bad files, and — wherever torch is installed — the
-//! PyTorch twin (python/dmbn_torch.py) predicting what `dmbn predict` does. Native only.
+//! PyTorch twin (python/dmbn_torch/) predicting what `dmbn predict` does. Native only.
 #![cfg(not(target_arch = "wasm32"))]
 
 #[path = "golden/prediction.rs"]
@@ -302,32 +302,6 @@ fn the_cli_exports_and_imports_and_names_the_file_in_errors() {
     assert!(!bad.exists());
 }
 
-/// A Python with torch and safetensors: `$DMBN_PYTHON`, the benchmark's venv
-/// (`~/.cache/dmbn/venv`, made by bench/model.sh), or `python3`; without one, the calling
-/// test is reported as skipped.
-fn python_with_torch() -> Option<PathBuf> {
-    let venv =
-        std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".cache/dmbn/venv/bin/python"));
-    let candidates = std::env::var_os("DMBN_PYTHON")
-        .map(PathBuf::from)
-        .into_iter()
-        .chain(venv)
-        .chain([PathBuf::from("python3")]);
-    for python in candidates {
-        let ok = Command::new(&python)
-            .args(["-c", "import torch, safetensors"])
-            .output()
-            .is_ok_and(|o| o.status.success());
-        if ok {
-            return Some(python);
-        }
-    }
-    support::skip(
-        "no Python with torch and safetensors (set DMBN_PYTHON, or run bench/model.sh once)",
-    );
-    None
-}
-
 /// The floats of tensor `name` in a safetensors file.
 fn floats(file: &SafeTensors, name: &str) -> Vec<f32> {
     let view = file.tensor(name).unwrap();
@@ -340,7 +314,7 @@ fn floats(file: &SafeTensors, name: &str) -> Vec<f32> {
 
 #[test]
 fn the_pytorch_twin_predicts_what_dmbn_predict_does() {
-    let Some(python) = python_with_torch() else {
+    let Some(python) = support::python_with_torch() else {
         return;
     };
     let dir = tempfile::tempdir().unwrap();
@@ -348,7 +322,6 @@ fn the_pytorch_twin_predicts_what_dmbn_predict_does() {
     // Sequence 0 is the golden prediction's episode.
     support::simulated_dataset(&data, [0], &[Action::Grasp], golden::SEED);
     let observe = golden::OBSERVE.map(|k| k.to_string()).join(",");
-    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("python/dmbn_torch.py");
     let dmbn = |args: &[&std::ffi::OsStr]| {
         let out = Command::new(env!("CARGO_BIN_EXE_dmbn"))
             .args(args)
@@ -394,9 +367,8 @@ fn the_pytorch_twin_predicts_what_dmbn_predict_does() {
                 "--arrays".as_ref(),
             ]);
             let twin = out.join("twin.safetensors");
-            let check = Command::new(&python)
-                .arg(&script)
-                .arg("check")
+            let check = support::twin(&python)
+                .args(["-m", "dmbn_torch", "check"])
                 .arg(&st)
                 .arg(out.join("prediction.safetensors"))
                 .args(["--tolerance", "1e-4", "--out"])
@@ -439,7 +411,7 @@ fn the_pytorch_twin_predicts_what_dmbn_predict_does() {
 /// a model file whose joint means moved by exactly 0.5 σ of the normalisation and nothing else.
 #[test]
 fn the_pytorch_twin_saves_what_dmbn_import_reads() {
-    let Some(python) = python_with_torch() else {
+    let Some(python) = support::python_with_torch() else {
         return;
     };
     let dir = tempfile::tempdir().unwrap();
@@ -451,15 +423,13 @@ fn the_pytorch_twin_saves_what_dmbn_import_reads() {
     let original = std::fs::read(support::asset("models/dmbn-sim.dmbn")).unwrap();
     std::fs::write(&exported, export_safetensors(&original, false).unwrap()).unwrap();
     let script = "import sys, torch\n\
-        sys.path.insert(0, sys.argv[1])\n\
         import dmbn_torch\n\
-        model = dmbn_torch.load(sys.argv[2])\n\
+        model = dmbn_torch.load(sys.argv[1])\n\
         with torch.no_grad():\n    model.network.decoder.joint.mean.bias.add_(0.5)\n\
-        dmbn_torch.save(model, sys.argv[3])\n";
+        dmbn_torch.save(model, sys.argv[2])\n";
     for command in [
-        Command::new(&python)
+        support::twin(&python)
             .args(["-c", script])
-            .arg(Path::new(env!("CARGO_MANIFEST_DIR")).join("python"))
             .arg(&exported)
             .arg(&trained),
         Command::new(env!("CARGO_BIN_EXE_dmbn"))

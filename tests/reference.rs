@@ -1,7 +1,7 @@
 //! Independent checks of the goldens, which the code under test blesses. The golden prediction
 //! (tests/golden/prediction.json): the shipped DMBN computed here in plain loops from its
 //! exported tensors (PyTorch names and layouts, `dmbn export`), following the PyTorch twin
-//! (python/dmbn_torch.py) rather than the burn sources, with no tensor library. The golden
+//! (python/dmbn_torch/) rather than the burn sources, with no tensor library. The golden
 //! scores (tests/golden/score.json): the scenarios' steps, the trivial baseline and every error
 //! and NLL measure recomputed here from the definitions in docs/results.md, for the baseline
 //! and for the model's prediction. Runs everywhere (the twin itself needs torch); a few target

@@ -13,7 +13,7 @@ use std::sync::Mutex;
 use dmbn::model::{read_header, ModelConfig, ModelKind, WeightDType};
 use dmbn::predict::{Observations, Predictor};
 use dmbn::sim::{episode, Action};
-use dmbn::train::{Checkpoint, Metrics, Schedule, TrainConfig, TrainError, Trainer};
+use dmbn::train::{Checkpoint, Metrics, Schedule, TrainConfig, TrainDevice, TrainError, Trainer};
 
 /// A dataset of `n` ids × both actions from the simulator.
 fn dataset(dir: &Path, n: u32) {
@@ -631,4 +631,38 @@ fn augmented_training_warps_its_batches_and_resumes_exactly() {
         assert_eq!(deterministic(x), deterministic(y), "step {}", x.step);
     }
     assert_eq!(final_prediction(&b), final_prediction(&parts));
+}
+
+#[test]
+fn devices_are_parsed_and_a_backend_not_built_says_how_to_build_it() {
+    for bad in ["gpu", "wgpu:x", "cpu:1", ""] {
+        let err = bad.parse::<TrainDevice>().unwrap_err();
+        assert!(
+            err.contains("expected cpu, wgpu") || err.contains("must be a number"),
+            "{bad:?}: {err}"
+        );
+    }
+    assert_eq!(
+        "wgpu:1".parse::<TrainDevice>(),
+        Ok(TrainDevice::Wgpu(Some(1)))
+    );
+    assert_eq!("cuda".parse::<TrainDevice>(), Ok(TrainDevice::Cuda(0)));
+    assert_eq!("cpu".parse::<TrainDevice>(), Ok(TrainDevice::Cpu));
+    for device in [
+        TrainDevice::Wgpu(None),
+        TrainDevice::Cpu,
+        TrainDevice::Cuda(2),
+    ] {
+        assert_eq!(device.to_string().parse::<TrainDevice>(), Ok(device));
+    }
+    #[cfg(not(feature = "cuda"))]
+    {
+        let err = TrainDevice::Cuda(0).device().err().unwrap().to_string();
+        assert!(err.contains("--features cuda"), "{err}");
+    }
+    #[cfg(not(feature = "wgpu"))]
+    {
+        let err = TrainDevice::Wgpu(None).device().err().unwrap().to_string();
+        assert!(err.contains("--features wgpu"), "{err}");
+    }
 }

@@ -107,7 +107,9 @@ impl ImageDecoderConfig {
             sigma: conv3x3([channels, 3], device),
             gate: self.gated.then(|| {
                 let mut gate = conv3x3([channels, 1], device);
-                gate.weight = gate.weight.map(|w| w.zeros_like());
+                // `map` keeps the zeros' own (off) gradient tracking: turn it back on, or a
+                // fresh model never trains these weights (only a loaded one does).
+                gate.weight = gate.weight.map(|w| w.zeros_like()).set_require_grad(true);
                 gate.bias = Some(Param::from_tensor(Tensor::full([1], GATE_BIAS, device)));
                 gate
             }),

@@ -1,5 +1,5 @@
 //! The model as a safetensors file for PyTorch: every tensor under the name and in the layout
-//! of its PyTorch twin (`python/dmbn_torch.py`: Conv2d `[out, in, kh, kw]`, Linear
+//! of its PyTorch twin (`python/dmbn_torch/`: Conv2d `[out, in, kh, kw]`, Linear
 //! `[out, in]`, LayerNorm `weight`/`bias`), and the model file's header (kind,
 //! hyperparameters, image size, joint normalisation) as the metadata entry `dmbn`.
 //!
@@ -117,7 +117,7 @@ pub fn read_metadata(bytes: &[u8]) -> Result<SafetensorsHeader, ModelError> {
         .ok_or_else(|| {
             ModelError::Safetensors(format!(
                 "no `{METADATA_KEY}` metadata: expected the model's kind, config and joint \
-                 normalisation as JSON (files written by `dmbn export` or python/dmbn_torch.py \
+                 normalisation as JSON (files written by `dmbn export` or python/dmbn_torch \
                  `save` have it)"
             ))
         })?;

@@ -1,5 +1,5 @@
 //! A prediction with the observations it was made from, as safetensors: what `dmbn predict
-//! --arrays` writes, so that another implementation (python/dmbn_torch.py `check`) can
+//! --arrays` writes, so that another implementation (python/dmbn_torch `check`) can
 //! predict from the same inputs and compare every value.
 use std::collections::HashMap;
 

@@ -74,7 +74,8 @@ pub struct TrainConfig {
     pub lr: f64,
     /// Learning-rate schedule.
     pub schedule: Schedule,
-    /// Gradient clipping by global norm.
+    /// Gradient clipping: each parameter's gradient scaled to this norm at most (burn's
+    /// `GradientClipping::Norm` works per tensor, not on one global norm).
     pub clip_norm: f32,
     /// The attentive model: weight of the mean squared error of the frame it draws, before its
     /// gate mixes it with the observed ones (through the gate it learns only where the gate is

@@ -6,6 +6,7 @@ mod config;
 mod error;
 mod metrics;
 mod split;
+mod train_device;
 mod trainer;
 mod val_quality;
 
@@ -14,5 +15,6 @@ pub use config::{Schedule, TrainConfig};
 pub use error::TrainError;
 pub use metrics::{Metrics, MetricsLog};
 pub use split::Split;
+pub use train_device::TrainDevice;
 pub use trainer::{Progress, Trainer};
 pub use val_quality::ValQuality;

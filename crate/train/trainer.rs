@@ -15,7 +15,8 @@ use crate::model::{
 use crate::predict::Predictor;
 
 use super::{
-    Checkpoint, CheckpointState, Metrics, MetricsLog, Split, TrainConfig, TrainError, ValQuality,
+    Checkpoint, CheckpointState, Metrics, MetricsLog, Split, TrainConfig, TrainDevice, TrainError,
+    ValQuality,
 };
 
 /// Separate random streams: validation batches never shift the training stream.
@@ -54,9 +55,20 @@ pub struct Trainer {
 
 impl Trainer {
     /// A fresh run on the dataset at `data`, writing into `out` (which must hold no checkpoint:
-    /// continue such a run with [`Trainer::resume`]).
+    /// continue such a run with [`Trainer::resume`]), on the CPU.
     pub fn new(data: &Path, out: &Path, config: TrainConfig) -> Result<Trainer, TrainError> {
+        Self::new_on(TrainDevice::Cpu, data, out, config)
+    }
+
+    /// [`Trainer::new`] on `device`.
+    pub fn new_on(
+        device: TrainDevice,
+        data: &Path,
+        out: &Path,
+        config: TrainConfig,
+    ) -> Result<Trainer, TrainError> {
         config.validate()?;
+        let device = device.device()?;
         if Checkpoint::read(out).is_ok() {
             return Err(TrainError::config(
                 "out",
@@ -65,7 +77,6 @@ impl Trainer {
         }
         std::fs::create_dir_all(out).map_err(TrainError::io(out))?;
         let split = Split::load(data, config.model.image_size, config.val_fraction)?;
-        let device = training_device();
         device.seed(config.seed);
         let model = match &config.init {
             Some(path) => {
@@ -111,12 +122,24 @@ impl Trainer {
     }
 
     /// Continue the run in `out` from its last checkpoint, with the same settings, on `data`
-    /// or (none given) the dataset the checkpoint names; `steps` may extend the run.
+    /// or (none given) the dataset the checkpoint names; `steps` may extend the run. On the
+    /// CPU.
     pub fn resume(
         data: Option<&Path>,
         out: &Path,
         steps: Option<u64>,
     ) -> Result<Trainer, TrainError> {
+        Self::resume_on(TrainDevice::Cpu, data, out, steps)
+    }
+
+    /// [`Trainer::resume`] on `device` (a run may move between devices at a checkpoint).
+    pub fn resume_on(
+        device: TrainDevice,
+        data: Option<&Path>,
+        out: &Path,
+        steps: Option<u64>,
+    ) -> Result<Trainer, TrainError> {
+        let device = device.device()?;
         let (model_bytes, optim_bytes, mut state) = Checkpoint::read(out)?;
         if let Some(steps) = steps {
             state.config.steps = steps;
@@ -140,7 +163,6 @@ impl Trainer {
             state.config.val_fraction,
         )?;
         state.data = Some(data);
-        let device = training_device();
         let (model, _, _) = model::load_bytes(&model_bytes, &device)?;
         let optim = optimizer(&state.config)
             .from_bytes(Bytes::from_bytes_vec(optim_bytes))
@@ -449,16 +471,7 @@ impl Trainer {
     }
 }
 
-/// The training device: flex on the CPU, or the first CUDA GPU with the `cuda` feature.
-fn training_device() -> Device {
-    #[cfg(feature = "cuda")]
-    let device = Device::cuda(0);
-    #[cfg(not(feature = "cuda"))]
-    let device = Device::flex();
-    device.autodiff()
-}
-
-/// Adam with gradient clipping by global norm.
+/// Adam with gradient clipping by norm, per parameter tensor (burn's `GradientClipping::Norm`).
 fn optimizer(config: &TrainConfig) -> ModuleOptimizer {
     AdamConfig::new()
         .with_grad_clipping(Some(GradientClippingConfig::Norm(config.clip_norm)))

@@ -44,6 +44,42 @@ pub fn skip(reason: &str) {
     }
 }
 
+/// A Python with torch and safetensors: `$DMBN_PYTHON`, the benchmark's venv
+/// (`~/.cache/dmbn/venv`, made by bench/model.sh), or `python3`; without one, the calling
+/// test is reported as skipped.
+pub fn python_with_torch() -> Option<PathBuf> {
+    let venv =
+        std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".cache/dmbn/venv/bin/python"));
+    let candidates = std::env::var_os("DMBN_PYTHON")
+        .map(PathBuf::from)
+        .into_iter()
+        .chain(venv)
+        .chain([PathBuf::from("python3")]);
+    for python in candidates {
+        let ok = std::process::Command::new(&python)
+            .args(["-c", "import torch, safetensors, numpy"])
+            .output()
+            .is_ok_and(|o| o.status.success());
+        if ok {
+            return Some(python);
+        }
+    }
+    skip(
+        "no Python with torch, safetensors and numpy (set DMBN_PYTHON, or run bench/model.sh once)",
+    );
+    None
+}
+
+/// `python` run in the repository's `python/` folder (where `-m dmbn_torch` and `import
+/// dmbn_torch` find the PyTorch twin), writing no `__pycache__`.
+pub fn twin(python: &Path) -> std::process::Command {
+    let mut command = std::process::Command::new(python);
+    command
+        .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join("python"))
+        .env("PYTHONDONTWRITEBYTECODE", "1");
+    command
+}
+
 /// A file of the repository's `assets/`.
 pub fn asset(path: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))

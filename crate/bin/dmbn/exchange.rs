@@ -23,7 +23,7 @@ pub struct ExportArgs {
 
 #[derive(Args)]
 pub struct ImportArgs {
-    /// Safetensors file with the `dmbn` metadata (from `dmbn export` or python/dmbn_torch.py).
+    /// Safetensors file with the `dmbn` metadata (from `dmbn export` or python/dmbn_torch).
     #[arg(long)]
     from: PathBuf,
     /// The model file to write (replaced if it exists).

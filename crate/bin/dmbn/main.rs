@@ -94,7 +94,7 @@ enum Command {
     /// Each model against the ceiling (the recorded joints performed) and the floor (the
     /// action's mean motion performed): success rate, object and path errors, joint RMSE.
     Imitate(imitate::ImitateArgs),
-    /// Write a model file's weights as safetensors for PyTorch (python/dmbn_torch.py).
+    /// Write a model file's weights as safetensors for PyTorch (python/dmbn_torch).
     ///
     /// Every tensor under its PyTorch twin's name and layout (Conv2d [out, in, kh, kw],
     /// Linear [out, in], LayerNorm weight/bias); the model's kind, config and joint

@@ -28,7 +28,7 @@ pub struct PredictArgs {
     #[arg(long)]
     out: PathBuf,
     /// Also write prediction.safetensors: the observations and every predicted value
-    /// unrounded (for python/dmbn_torch.py `check`, or numpy).
+    /// unrounded (for python/dmbn_torch `check`, or numpy).
     #[arg(long)]
     arrays: bool,
 }

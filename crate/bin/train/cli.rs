@@ -8,7 +8,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use dmbn::augment::TimeWarpConfig;
 use dmbn::data::id_list;
 use dmbn::model::{read_header, ModelConfig, ModelKind};
-use dmbn::train::{Schedule, TrainConfig, TrainError, Trainer};
+use dmbn::train::{Schedule, TrainConfig, TrainDevice, TrainError, Trainer};
 
 /// `--model`: the command line's names of [`ModelKind`].
 #[derive(Clone, Copy, ValueEnum)]
@@ -120,7 +120,7 @@ struct Args {
     /// Learning-rate schedule.
     #[arg(long, value_enum, default_value = "constant")]
     schedule: ScheduleArg,
-    /// Gradient clipping: largest global gradient norm.
+    /// Gradient clipping: largest norm of each parameter tensor's gradient (clipped one by one).
     #[arg(long, default_value_t = defaults().clip_norm)]
     clip_norm: f32,
     /// Weight of the joint NLL in the loss (the original's 0.01).
@@ -158,6 +158,11 @@ struct Args {
     /// Continue the run in --out from its last checkpoint (same settings).
     #[arg(long)]
     resume: bool,
+    /// Where to train: cpu, wgpu (burn's wgpu backend: Vulkan, Metal or DX12; wgpu's choice
+    /// of adapter), wgpu:N (the N-th discrete GPU) or cuda[:N]. The GPU backends are cargo
+    /// features (`--features wgpu`, `--features cuda`); a run may resume on another device.
+    #[arg(long, default_value = "cpu", value_parser = |s: &str| s.parse::<TrainDevice>())]
+    device: TrainDevice,
     /// Time-warp augmentation (the paper's): random sections sped up or slowed down (0.5-2x)
     /// and repeated frames inserted, in 80% of the training sequences.
     #[arg(long)]
@@ -219,7 +224,8 @@ fn defaults() -> TrainConfig {
 fn run(args: Args) -> Result<(), TrainError> {
     let model = args.model.map(ModelKind::from);
     let mut trainer = if args.resume {
-        let mut trainer = Trainer::resume(args.data.as_deref(), &args.out, args.steps)?;
+        let mut trainer =
+            Trainer::resume_on(args.device, args.data.as_deref(), &args.out, args.steps)?;
         if args.half {
             trainer.write_half();
         }
@@ -307,7 +313,7 @@ fn run(args: Args) -> Result<(), TrainError> {
         });
         config.init = args.init.clone();
         config.half = args.half;
-        Trainer::new(data, &args.out, config)?
+        Trainer::new_on(args.device, data, &args.out, config)?
     };
     let steps = trainer.config().steps;
     let bar = ProgressBar::new(steps).with_position(trainer.step_count());
@@ -318,11 +324,12 @@ fn run(args: Args) -> Result<(), TrainError> {
         .expect("valid template"),
     );
     eprintln!(
-        "training {} on {} (validation ids {}), output in {}",
+        "training {} on {} ({}; validation ids {}), output in {}",
         trainer.config().model.kind,
         trainer
             .data()
             .map_or("?".into(), |d| d.display().to_string()),
+        args.device,
         id_list(trainer.val_ids()),
         args.out.display()
     );

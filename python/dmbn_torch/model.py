@@ -1,31 +1,12 @@
-"""The PyTorch twin of dmbn's models: DMBN, DMBN-PTE and the attentive model, layer for layer.
+"""The networks of dmbn in PyTorch: DMBN, DMBN-PTE and the attentive model, layer for layer.
 
-Load the weights `dmbn export` writes and predict as `dmbn predict` does:
-
-    import dmbn_torch
-    model = dmbn_torch.load("dmbn-sim.safetensors")          # eval mode, on the CPU
-    out = model.predict(frames, joints, times, target_times, blend=0.5)
-    out["joint_mean"], out["joint_sigma"]                     # [T, 7], radians
-    out["image_mean"], out["image_sigma"]                     # [T, S, S, 3], in [0, 1]
-
-`frames` are the observed RGB frames as uint8 `[N, S, S, 3]`, `joints` the observed joint
-values `[N, 7]` (not normalised), `times` their phases in [0, 1], `target_times` the phases to
-predict; `blend` is c: 1 = frames only, 0 = joints only. The model works on normalised joints
-(`model.normalization`); `predict` maps them in and out. Modules and tensor names follow the
-Rust sources (crate/model/), so `model.state_dict()` holds exactly the exported tensors, and
-`save(model, path)` writes weights trained here in the file `dmbn import` reads.
-
-Command line:
-    python dmbn_torch.py check MODEL.safetensors PREDICTION.safetensors [--tolerance 1e-4] [--out F]
-compares this twin with `dmbn predict --arrays` (the inputs are in the prediction file) and
-exits 1 when any value differs by more than the tolerance.
-
-Needs torch and safetensors (pip install torch safetensors numpy).
+Modules and tensor names follow the Rust sources (crate/model/), so `Predictor.state_dict()`
+holds exactly the tensors `dmbn export` writes; `load` reads such a file, `save` writes one
+`dmbn import` reads. The networks are differentiable end to end (`train.py` trains them);
+`Predictor.predict` maps dataset units in and out as `dmbn predict` does.
 """
-import argparse
 import json
 import math
-import sys
 
 import torch
 import torch.nn as nn
@@ -175,7 +156,9 @@ class ImageDecoder(nn.Module):
     """2x2 start, Conv 3x3 + ReLU + nearest UpSampling x2 blocks, two full-resolution convs
     (the original's Conv 16, Conv 8; `image_decoder_shape` gives both widths; with
     `coarse_tail` they come before the last upsampling), mean (sigmoid) and σ heads; gated (the
-    attentive model), a gate head mixes the mean with the interpolated observed frames."""
+    attentive model), a gate head mixes the mean with the interpolated observed frames.
+    Returns (mean, σ, drawn): drawn is the gated decoder's own frame before the mix (what
+    `--drawn-frame-weight` supervises), None otherwise."""
 
     def __init__(self, blocks, tail_filters, coarse_tail, sigma_floor, gated):
         super().__init__()
@@ -208,10 +191,10 @@ class ImageDecoder(nn.Module):
         drawn = torch.sigmoid(self.mean(y))
         sigma = bounded_sigma(self.sigma(y), self.sigma_floor)
         if self.gate is None or start is None:
-            return drawn, sigma
+            return drawn, sigma, None
         frames, observed, near = start
         g = (torch.sigmoid(self.gate(y)) * (1 - near) + near) * observed
-        return frames * g + drawn * (1 - g), sigma
+        return frames * g + drawn * (1 - g), sigma, drawn
 
 
 class JointDecoder(nn.Module):
@@ -252,15 +235,24 @@ class Decoder(nn.Module):
     def forward(self, x, start=None):
         b, m, _ = x.shape
         x = F.relu(self.shared(x.reshape(b * m, -1)))
-        image_mean, image_sigma = self.image(x, start and start.frames())
+        image_mean, image_sigma, drawn = self.image(x, start and start.frames())
         joint_mean, joint_sigma = self.joint(x, start and start.joints())
         s = image_mean.shape[-1]
         return {
             "image_mean": image_mean.reshape(b, m, 3, s, s),
             "image_sigma": image_sigma.reshape(b, m, 3, s, s),
+            "image_drawn": None if drawn is None else drawn.reshape(b, m, 3, s, s),
             "joint_mean": joint_mean.reshape(b, m, JOINTS),
             "joint_sigma": joint_sigma.reshape(b, m, JOINTS),
         }
+
+    def joints(self, x, start=None):
+        """Only the joints' mean and σ, [B, M, 7] each: the image decoder, most of a target's
+        cost, is skipped (joint-only training targets)."""
+        b, m, _ = x.shape
+        x = F.relu(self.shared(x.reshape(b * m, -1)))
+        mean, sigma = self.joint(x, start and start.joints())
+        return mean.reshape(b, m, JOINTS), sigma.reshape(b, m, JOINTS)
 
 
 def masked_mean(z, mask):
@@ -303,10 +295,15 @@ class Dmbn(nn.Module):
         joint = self.joint_encoder(torch.cat([c.times.unsqueeze(2), c.joints], 2))
         return blend(masked_mean(image, c.mask), masked_mean(joint, c.mask), c.blend)
 
-    def decode(self, r, target_times):
+    def condition(self, r, target_times):
         m = target_times.shape[1]
-        x = torch.cat([r.unsqueeze(1).expand(-1, m, -1), target_times.unsqueeze(2)], 2)
-        return self.decoder(x)
+        return torch.cat([r.unsqueeze(1).expand(-1, m, -1), target_times.unsqueeze(2)], 2), None
+
+    def decode(self, r, target_times):
+        return self.decoder(*self.condition(r, target_times))
+
+    def decode_joints(self, r, target_times):
+        return self.decoder.joints(*self.condition(r, target_times))
 
 
 class _PteEncoders(nn.Module):
@@ -342,9 +339,14 @@ class DmbnPte(_PteEncoders):
         image, joint = self.encode_contexts(c)
         return blend(masked_mean(image, c.mask), masked_mean(joint, c.mask), c.blend)
 
+    def condition(self, r, target_times):
+        return r.unsqueeze(1) - self.time(target_times), None
+
     def decode(self, r, target_times):
-        x = r.unsqueeze(1) - self.time(target_times)
-        return self.decoder(x)
+        return self.decoder(*self.condition(r, target_times))
+
+    def decode_joints(self, r, target_times):
+        return self.decoder.joints(*self.condition(r, target_times))
 
 
 class Start:
@@ -384,28 +386,26 @@ class Start:
 def interpolation(target_times, times, mask):
     """Per target, each context's linear interpolation weight [B, M, N] and the distances to
     the nearest observation before and after it [B, M, 2] (capped at 1), as
-    crate/model/interpolation.rs."""
-    b, m = target_times.shape
-    n = times.shape[1]
-    weights = torch.zeros(b, m, n)
-    gaps = torch.ones(b, m, 2)
-    for s in range(b):
-        real = [i for i in range(n) if mask[s, i] > 0.5]
-        t = times[s].tolist()
-        for j, target in enumerate(target_times[s].tolist()):
-            before = [i for i in real if t[i] <= target]
-            after = [i for i in real if t[i] >= target]
-            a = max(before, key=lambda i: t[i]) if before else None
-            z = min(after, key=lambda i: t[i]) if after else None
-            if a is not None and z is not None and t[z] > t[a]:
-                w = (target - t[a]) / (t[z] - t[a])
-                weights[s, j, a], weights[s, j, z] = 1 - w, w
-            elif a is not None or z is not None:
-                weights[s, j, a if a is not None else z] = 1.0
-            if before:
-                gaps[s, j, 0] = min(min(abs(t[i] - target) for i in before), 1.0)
-            if after:
-                gaps[s, j, 1] = min(min(abs(t[i] - target) for i in after), 1.0)
+    crate/model/interpolation.rs: between the nearest real observations before and after a
+    target, held outside them. Times alone decide them: no gradient."""
+    with torch.no_grad():
+        t = times.unsqueeze(1)                                  # [B, 1, N]
+        target = target_times.unsqueeze(2)                      # [B, M, 1]
+        real = (mask > 0.5).unsqueeze(1)
+        before, after = real & (t <= target), real & (t >= target)
+        inf = torch.tensor(math.inf, device=times.device)
+        t_a, a = torch.where(before, t, -inf).max(2)            # nearest before (or −inf)
+        t_z, z = torch.where(after, t, inf).min(2)              # nearest after (or +inf)
+        has_a, has_z = before.any(2), after.any(2)
+        both = has_a & has_z & (t_z > t_a)
+        w = torch.where(both, (target_times - t_a) / torch.where(both, t_z - t_a, 1.0), 0.0)
+        one_hot = lambda i: F.one_hot(i, times.shape[1]).to(times.dtype)  # noqa: E731
+        # Between two observations: 1 − w and w; on one side only: 1 at the nearest.
+        weights = torch.where(
+            both.unsqueeze(2), one_hot(a) * (1 - w).unsqueeze(2) + one_hot(z) * w.unsqueeze(2),
+            torch.where(has_a.unsqueeze(2), one_hot(a),
+                        torch.where(has_z.unsqueeze(2), one_hot(z), 0.0)))
+        gaps = torch.stack([target_times - t_a, t_z - target_times], 2).clamp(max=1.0)
     return weights, gaps
 
 
@@ -440,6 +440,13 @@ class DmbnAttn(_PteEncoders):
                 "keys": self.time_embedding(c.times)}
 
     def decode(self, r, target_times):
+        return self.decoder(*self.condition(r, target_times))
+
+    def decode_joints(self, r, target_times):
+        return self.decoder.joints(*self.condition(r, target_times))
+
+    def condition(self, r, target_times):
+        """The decoder input at [B, M] target times, and where the decoders start."""
         c = r["contexts"]
         queries = self.time_embedding(target_times)
         padding = c.mask < 0.5
@@ -449,7 +456,7 @@ class DmbnAttn(_PteEncoders):
         x = (blend(image, joint, c.blend) - self.time(target_times)
              + (start.observed @ self.observed).unsqueeze(1)
              + self.start_projection(start.features()))
-        return self.decoder(x, start)
+        return x, start
 
 
 KINDS = {"dmbn": Dmbn, "pte": DmbnPte, "attn": DmbnAttn}
@@ -472,26 +479,27 @@ class Predictor(nn.Module):
     @torch.no_grad()
     def predict(self, frames, joints, times, target_times, blend=0.5):
         s = self.config["image_size"]
+        device = next(self.parameters()).device
         frames = torch.as_tensor(frames)
         if tuple(frames.shape[1:]) != (s, s, 3):
             raise ValueError(f"frames: expected [N, {s}, {s}, 3] uint8, found {list(frames.shape)}")
-        mean = torch.tensor(self.normalization["mean"])
-        std = torch.tensor(self.normalization["std"])
+        mean = torch.tensor(self.normalization["mean"], device=device)
+        std = torch.tensor(self.normalization["std"], device=device)
         # A calibrated file's factor on every joint σ (`dmbn calibrate`; absent: 1).
         sigma_scale = float(self.header.get("joint_sigma_scale") or 1.0)
-        joints = (torch.as_tensor(joints, dtype=torch.float32) - mean) / std
+        joints = (torch.as_tensor(joints, dtype=torch.float32, device=device) - mean) / std
         n = joints.shape[0]
         contexts = Contexts(
-            frames=(frames.float() / 255.0).permute(0, 3, 1, 2).unsqueeze(0),
+            frames=(frames.to(device).float() / 255.0).permute(0, 3, 1, 2).unsqueeze(0),
             joints=joints.unsqueeze(0),
-            times=torch.as_tensor(times, dtype=torch.float32).reshape(1, n),
-            mask=torch.ones(1, n),
-            blend=torch.tensor([float(blend)]),
+            times=torch.as_tensor(times, dtype=torch.float32, device=device).reshape(1, n),
+            mask=torch.ones(1, n, device=device),
+            blend=torch.tensor([float(blend)], device=device),
         )
         r = self.network.encode(contexts)
-        target_times = torch.as_tensor(target_times, dtype=torch.float32)
+        target_times = torch.as_tensor(target_times, dtype=torch.float32, device=device)
         parts = [self.network.decode(r, chunk.unsqueeze(0)) for chunk in target_times.split(CHUNK)]
-        out = {k: torch.cat([p[k][0] for p in parts]) for k in parts[0]}
+        out = {k: torch.cat([p[k][0] for p in parts]) for k in parts[0] if k != "image_drawn"}
         return {
             "image_mean": out["image_mean"].permute(0, 2, 3, 1),
             "image_sigma": out["image_sigma"].permute(0, 2, 3, 1),
@@ -500,7 +508,7 @@ class Predictor(nn.Module):
         }
 
 
-def load(path):
+def load(path, device="cpu"):
     """The model in a safetensors file written by `dmbn export` (or `save`), in eval mode."""
     from safetensors import safe_open
     from safetensors.torch import load_file
@@ -512,49 +520,20 @@ def load(path):
     model = Predictor(json.loads(metadata["dmbn"]))
     tensors = {"network." + k: v.float() for k, v in load_file(path).items()}
     model.load_state_dict(tensors, strict=True)
-    return model.eval()
+    return model.to(device).eval()
 
 
-def save(model, path):
-    """Writes `model` (a Predictor) for `dmbn import`: its tensors and its header."""
-    from safetensors.torch import save_file
+def save(model, path, half=False):
+    """Writes `model` (a Predictor) for `dmbn import`: its tensors (f16 with `half`) and its
+    header, atomically (a temporary file renamed over `path`)."""
+    import os
 
-    header = dict(model.header, producer="dmbn_torch.py")
-    tensors = {k: v.detach().contiguous() for k, v in model.state_dict_for_export().items()}
-    save_file(tensors, path, metadata={"dmbn": json.dumps(header)})
+    from safetensors.torch import save as serialize
 
-
-def check(model_path, prediction_path, tolerance, out_path=None):
-    """The largest difference between this twin and `dmbn predict --arrays`, per output;
-    returns whether all are within `tolerance`. With `out_path`, saves the twin's prediction
-    there (same names and shapes)."""
-    from safetensors.torch import load_file, save_file
-
-    arrays = load_file(prediction_path)
-    model = load(model_path)
-    out = model.predict(arrays["observed_frames"], arrays["observed_joints"],
-                        arrays["observed_times"], arrays["target_times"],
-                        float(arrays["blend"][0]))
-    if out_path:
-        save_file({k: v.contiguous() for k, v in out.items()}, out_path)
-    worst = {k: float((out[k] - arrays[k]).abs().max()) for k in out}
-    ok = all(v <= tolerance for v in worst.values())
-    print(json.dumps({"model": model.config["kind"], "max_abs_diff": worst,
-                      "tolerance": tolerance, "ok": ok}))
-    return ok
-
-
-def main():
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    sub = parser.add_subparsers(dest="command", required=True)
-    c = sub.add_parser("check", help="compare with `dmbn predict --arrays`")
-    c.add_argument("model")
-    c.add_argument("prediction")
-    c.add_argument("--tolerance", type=float, default=1e-4)
-    c.add_argument("--out", help="also save the twin's prediction (safetensors)")
-    args = parser.parse_args()
-    sys.exit(0 if check(args.model, args.prediction, args.tolerance, args.out) else 1)
-
-
-if __name__ == "__main__":
-    main()
+    header = dict(model.header, producer="dmbn_torch")
+    dtype = torch.float16 if half else torch.float32
+    tensors = {k: v.detach().to("cpu", dtype).contiguous()
+               for k, v in model.state_dict_for_export().items()}
+    with open(f"{path}.tmp", "wb") as f:
+        f.write(serialize(tensors, metadata={"dmbn": json.dumps(header)}))
+    os.replace(f"{path}.tmp", path)
