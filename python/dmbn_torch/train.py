@@ -360,6 +360,10 @@ def main(argv=None):
         path = run.run()
         if world.rank == 0:
             print(f"wrote {path}")
+        if world.size > 1:
+            # Every process waits for rank 0's files before any tears the group down (gloo
+            # aborts a process whose peer is gone mid-teardown).
+            dist.barrier()
     except (ValueError, FloatingPointError, OSError) as e:
         print(f"error: {e}", file=sys.stderr)
         sys.exit(1)
