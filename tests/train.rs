@@ -666,3 +666,82 @@ fn devices_are_parsed_and_a_backend_not_built_says_how_to_build_it() {
         assert!(err.contains("--features wgpu"), "{err}");
     }
 }
+
+/// The exported (PyTorch-named) tensors of a model file.
+fn tensors_of(file: &[u8]) -> std::collections::HashMap<String, Vec<f32>> {
+    let st = dmbn::model::export_safetensors(file, false).unwrap();
+    let parsed = safetensors::SafeTensors::deserialize(&st).unwrap();
+    parsed
+        .tensors()
+        .into_iter()
+        .map(|(name, view)| {
+            let values = view
+                .data()
+                .chunks_exact(4)
+                .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+                .collect();
+            (name, values)
+        })
+        .collect()
+}
+
+#[test]
+fn glorot_initialization_draws_the_original_keras_weights_and_trains_them() {
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("data");
+    dataset(&data, 1);
+    let run = |initialization, lr, name: &str| {
+        let mut config = small(ModelKind::Dmbn, 2);
+        config.val_fraction = 0.0;
+        config.initialization = initialization;
+        config.lr = lr;
+        let out = tmp.path().join(name);
+        run_to_the_end(&data, &out, config);
+        tensors_of(&std::fs::read(out.join("model.dmbn")).unwrap())
+    };
+    use dmbn::model::Initialization::{Glorot, He};
+    // A learning rate too small to move anything: the weights as drawn.
+    let (glorot, he) = (run(Glorot, 1e-30, "glorot"), run(He, 1e-30, "he"));
+    // Glorot-uniform: U(±√(6 / (fan-in + fan-out))), receptive fields in both fans.
+    for (name, fan_in, fan_out) in [
+        ("decoder.shared.weight", 129, 1024),
+        ("image_encoder.convs.0.weight", 4 * 9, 32 * 9),
+        ("joint_encoder.layers.0.weight", 8, 32),
+    ] {
+        let limit = (6.0f32 / (fan_in + fan_out) as f32).sqrt();
+        let w = &glorot[name];
+        let largest = w.iter().fold(0.0f32, |m, v| m.max(v.abs()));
+        assert!(
+            largest <= limit && largest > 0.9 * limit,
+            "{name}: {largest} vs {limit}"
+        );
+        let std = (w.iter().map(|v| v * v).sum::<f32>() / w.len() as f32).sqrt();
+        let want = limit / 3f32.sqrt();
+        assert!(
+            (std / want - 1.0).abs() < 0.1,
+            "{name}: std {std}, uniform's {want}"
+        );
+        // He-uniform's range, sqrt(6 / fan-in), is wider.
+        let he_largest = he[name].iter().fold(0.0f32, |m, v| m.max(v.abs()));
+        assert!(
+            he_largest > 1.3 * largest,
+            "{name}: he {he_largest}, glorot {largest}"
+        );
+    }
+    // Zero biases (moved by at most the 1e-30 step).
+    assert!(glorot["decoder.shared.bias"]
+        .iter()
+        .all(|b| b.abs() < 1e-20));
+    // The redrawn weights train (a fresh tensor does not track gradients by itself).
+    let trained = run(Glorot, 1e-3, "trained");
+    for name in ["decoder.shared.weight", "image_encoder.convs.0.weight"] {
+        assert_ne!(trained[name], glorot[name], "{name} did not train");
+    }
+    // Refused for the attentive model (its gates and read-out start from zero by design).
+    let mut config = small(ModelKind::Attn, 2);
+    config.initialization = Glorot;
+    let err = new_trainer(&data, &tmp.path().join("attn"), config)
+        .err()
+        .unwrap();
+    assert!(err.to_string().contains("initialization"), "{err}");
+}

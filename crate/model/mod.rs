@@ -62,6 +62,7 @@ pub use file::{
 pub use gaussian::bounded_sigma;
 pub use image_decoder::{upsample2, DecodedFrames, ImageDecoder, ImageDecoderConfig};
 pub use image_encoder::{ImageEncoder, ImageEncoderConfig};
+pub use init::{glorot, Initialization};
 pub use interpolation::{gaps, interpolation_tensors, linear_weights};
 pub use joint_decoder::{JointDecoder, JointDecoderConfig};
 pub use joint_encoder::{JointEncoder, JointEncoderConfig};

@@ -4,7 +4,7 @@ use serde::{Deserialize, Deserializer, Serialize};
 
 use super::TrainError;
 use crate::augment::TimeWarpConfig;
-use crate::model::{ModelConfig, ModelKind};
+use crate::model::{Initialization, ModelConfig, ModelKind};
 
 /// Learning-rate schedule over the run, a pure function of the step (so resuming needs no
 /// scheduler state).
@@ -108,6 +108,11 @@ pub struct TrainConfig {
     /// frame size. The joint normalisation is fitted on the run's training data either way.
     #[serde(default)]
     pub init: Option<PathBuf>,
+    /// How fresh weights are drawn (ignored with `init`): He-uniform, or the original Keras
+    /// model's Glorot-uniform for the paper's own recipe (DMBN and DMBN-PTE only: the
+    /// attentive model's gates and read-out start from zero by design).
+    #[serde(default)]
+    pub initialization: Initialization,
     /// Write the final and best models with f16 weights (half the size); kept with the
     /// checkpoint so that a resumed run writes what the run would have.
     #[serde(default)]
@@ -141,6 +146,7 @@ impl TrainConfig {
             quality_sequences: 10,
             augment: None,
             init: None,
+            initialization: Initialization::He,
             half: false,
         }
     }
@@ -201,6 +207,13 @@ impl TrainConfig {
         if let Some(warp) = &self.augment {
             warp.validate()
                 .map_err(|reason| TrainError::config("augment", reason.to_string()))?;
+        }
+        if self.initialization == Initialization::Glorot && self.model.kind == ModelKind::Attn {
+            return Err(TrainError::config(
+                "initialization",
+                "glorot is for dmbn and pte: the attentive model's gates and read-out start from \
+                 zero by design",
+            ));
         }
         self.model.validate()?;
         Ok(())

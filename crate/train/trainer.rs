@@ -10,7 +10,8 @@ use rand_pcg::Pcg64;
 use crate::augment::{Batch, Sampler, SamplerConfig};
 use crate::data::{write_atomic, Sequence};
 use crate::model::{
-    self, joint_nll, joint_target_tensors, tensors, LossValues, Model, Normalization,
+    self, glorot, joint_nll, joint_target_tensors, tensors, Initialization, LossValues, Model,
+    Normalization,
 };
 use crate::predict::Predictor;
 
@@ -99,7 +100,10 @@ impl Trainer {
             None => {
                 let model = config.model.init(&device)?;
                 model.draw_weights();
-                model
+                match config.initialization {
+                    Initialization::He => model,
+                    Initialization::Glorot => glorot(model),
+                }
             }
         };
         // Fitted on the training data even when starting from a file: the same as the file's

@@ -7,7 +7,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 use dmbn::augment::TimeWarpConfig;
 use dmbn::data::id_list;
-use dmbn::model::{read_header, ModelConfig, ModelKind};
+use dmbn::model::{read_header, Initialization, ModelConfig, ModelKind};
 use dmbn::train::{Schedule, TrainConfig, TrainDevice, TrainError, Trainer};
 
 /// `--model`: the command line's names of [`ModelKind`].
@@ -29,6 +29,15 @@ impl From<ModelArg> for ModelKind {
             ModelArg::Attn => ModelKind::Attn,
         }
     }
+}
+
+/// `--initialization`: how fresh weights are drawn.
+#[derive(Clone, Copy, ValueEnum)]
+enum InitializationArg {
+    /// He-uniform weights, zero biases (the project's)
+    He,
+    /// Glorot-uniform weights, zero biases (the original Keras model's; dmbn and pte)
+    Glorot,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -155,6 +164,10 @@ struct Args {
     /// best.dmbn in --out. 0 turns it off.
     #[arg(long, default_value_t = defaults().quality_sequences)]
     quality_sequences: usize,
+    /// How fresh weights are drawn (not with --init): he (the project's) or glorot (the
+    /// original Keras model's, for the paper's own recipe; dmbn and pte only).
+    #[arg(long, value_enum, default_value = "he")]
+    initialization: InitializationArg,
     /// Continue the run in --out from its last checkpoint (same settings).
     #[arg(long)]
     resume: bool,
@@ -312,6 +325,10 @@ fn run(args: Args) -> Result<(), TrainError> {
             ..TimeWarpConfig::default()
         });
         config.init = args.init.clone();
+        config.initialization = match args.initialization {
+            InitializationArg::He => Initialization::He,
+            InitializationArg::Glorot => Initialization::Glorot,
+        };
         config.half = args.half;
         Trainer::new_on(args.device, data, &args.out, config)?
     };
