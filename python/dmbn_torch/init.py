@@ -25,10 +25,22 @@ def he_uniform(layer):
 
 
 @torch.no_grad()
-def initialise(network):
+def initialise(network, initialization="he"):
     """Draws every weight of a Dmbn, DmbnPte or DmbnAttn (seed torch first for a repeatable
-    draw); returns it."""
+    draw); returns it. `initialization="glorot"` (DMBN and DMBN-PTE): the original Keras
+    model's Glorot-uniform weights and zero biases for every dense and convolution layer, as
+    `train --initialization glorot`."""
     from .model import MultiHeadAttention, TimeProjection
+
+    if initialization == "glorot":
+        if hasattr(network, "observed"):
+            raise ValueError("--initialization glorot is for dmbn and pte: the attentive "
+                             "model's gates and read-out start from zero by design")
+        for module in network.modules():
+            if isinstance(module, (nn.Linear, nn.Conv2d)):
+                nn.init.xavier_uniform_(module.weight)  # fans count receptive fields
+                nn.init.zeros_(module.bias)
+        return network
 
     keep_default = set()
     for module in network.modules():

@@ -124,6 +124,7 @@ def train_config(args):
         "val_fraction": args.val_fraction, "val_every": args.val_every, "val_batches": 8,
         "checkpoint_every": args.checkpoint_every,
         "augment": warp.to_json() if warp else None, "init": args.init, "half": args.half,
+        "initialization": args.initialization,
     }
     for field in ["steps", "batch", "max_contexts", "targets_per_sequence", "val_every",
                   "checkpoint_every"]:
@@ -187,7 +188,7 @@ class Run:
         self.predictor = Predictor(header).to(world.device)
         network = self.predictor.network
         torch.manual_seed(c["seed"])
-        initialise(network)
+        initialise(network, c.get("initialization", "he"))
         if state:
             network.load_state_dict(state["model"])
         elif c["init"]:
@@ -341,6 +342,8 @@ def arguments(argv=None):
     a("--freeze-fraction", type=lambda s: tuple(float(v) for v in s.split("-")),
       help="with --augment: freeze lengths as a LOW-HIGH fraction of the warped sequence")
     a("--half", action="store_true", help="write model.safetensors with f16 weights")
+    a("--initialization", choices=["he", "glorot"], default="he",
+      help="fresh weights: he (the project's) or glorot (the original Keras model's; dmbn, pte)")
     a("--device", default="auto", help="auto (cuda when there is one), cpu or cuda")
     return p.parse_args(argv)
 
