@@ -127,6 +127,25 @@ for pte in pte pte-aug; do
   "$bin/dmbn" probe --data "$probe_data" --dmbn "${file[dmbn]}" --pte "${file[$pte]}" --seeds 5 \
     "${probe_split[@]}" --out "$out/probe-$pte"
 done
+# Table 1 with the paper's own recipe (the original data): DMBN trained as the original was
+# (Glorot-uniform weights, one sequence and one target per step, joint weight 0.01, Adam 1e-4;
+# 15,000 steps). Its shape is the paper's, where the quality recipe's DMBN keeps time.
+paper=$root/assets/models/dmbn-paper-$set_name.dmbn
+if [ "${TRAIN:-0}" = 1 ] && [ "$set_name" = 2020 ]; then
+  if [ -f "$out/runs/dmbn-paper/checkpoint/state.json" ]; then
+    "$bin/train" --resume --data "$data" --out "$out/runs/dmbn-paper"
+  else
+    "$bin/train" --data "$data" --out "$out/runs/dmbn-paper" --model dmbn --initialization glorot \
+      --batch 1 --targets-per-sequence 1 --max-contexts 5 --lr 1e-4 --schedule constant \
+      --joint-weight 0.01 --val-fraction "$fraction" --steps 15000 --val-every 5000 \
+      --checkpoint-every 5000 --half --seed 1
+  fi
+  paper=$out/runs/dmbn-paper/model.dmbn
+fi
+if [ -f "$paper" ] && [ -n "${file[pte-aug]:-}" ]; then
+  "$bin/dmbn" probe --data "$probe_data" --dmbn "$paper" --pte "${file[pte-aug]}" --seeds 5 \
+    "${probe_split[@]}" --out "$out/probe-paper-recipe"
+fi
 
 # t/p/f on every held-out sequence: 20 observations spread over the sequence, both modalities.
 for m in "${models[@]}"; do
