@@ -108,51 +108,8 @@ fn uses_its_observations(names: &[&str]) {
     let (seqs, mean) = (unseen(), mean_motion());
     for &name in names {
         let predictor = Predictor::load(support::asset(&format!("models/{name}.dmbn"))).unwrap();
-        let (model, _, mean_motion) = support::measure(&predictor, &seqs, Scenario::Interp, &mean);
-        let (fresh, _, _) = support::measure(
-            &support::untrained(predictor.model().kind(), Normalization::identity()),
-            &seqs,
-            Scenario::Interp,
-            &mean,
-        );
-        println!("{name}: {model:?}\nmean motion: {mean_motion:?}");
-        for (what, got, mean, fresh) in [
-            (
-                "joint RMSE",
-                model.joint_rmse,
-                mean_motion.joint_rmse,
-                fresh.joint_rmse,
-            ),
-            (
-                "joint RMSE at the observed steps",
-                model.observed_joint_rmse,
-                mean_motion.observed_joint_rmse,
-                fresh.observed_joint_rmse,
-            ),
-            (
-                "image MSE",
-                model.image_mse,
-                mean_motion.image_mse,
-                fresh.image_mse,
-            ),
-            (
-                "image MSE at the observed steps",
-                model.observed_image_mse,
-                mean_motion.observed_image_mse,
-                fresh.observed_image_mse,
-            ),
-        ] {
-            assert!(
-                got < 0.8 * mean,
-                "{name}: {what} {got:.5}, the mean motion's {mean:.5}"
-            );
-            // Both 0 (up to rounding): the attentive model returns its observed joints by
-            // construction, trained or not (a model that ignores its observations cannot).
-            assert!(
-                got < 0.8 * fresh || got.max(fresh) < 1e-6,
-                "{name}: {what} {got:.5}, an untrained model's {fresh:.5}"
-            );
-        }
+        let fresh = support::untrained(predictor.model().kind(), Normalization::identity());
+        support::assert_uses_its_observations(name, &predictor, &fresh, &seqs, &mean);
     }
 }
 

@@ -134,45 +134,7 @@ fn original_data_weights_use_their_observations_on_held_out_ids() {
     for name in ["attn-2020", "dmbn-2020", "pte-2020", "pte-aug-2020"] {
         let predictor = shipped(name);
         let fresh = support::untrained(predictor.model().kind(), *predictor.normalization());
-        let (model, _, motion) = support::measure(&predictor, &held, Scenario::Interp, &mean);
-        let (untrained, _, _) = support::measure(&fresh, &held, Scenario::Interp, &mean);
-        for (what, got, motion, untrained) in [
-            (
-                "joint RMSE",
-                model.joint_rmse,
-                motion.joint_rmse,
-                untrained.joint_rmse,
-            ),
-            (
-                "joint RMSE at the observed steps",
-                model.observed_joint_rmse,
-                motion.observed_joint_rmse,
-                untrained.observed_joint_rmse,
-            ),
-            (
-                "image MSE",
-                model.image_mse,
-                motion.image_mse,
-                untrained.image_mse,
-            ),
-            (
-                "image MSE at the observed steps",
-                model.observed_image_mse,
-                motion.observed_image_mse,
-                untrained.observed_image_mse,
-            ),
-        ] {
-            println!("{name}: {what} {got:.5}, mean motion {motion:.5}, untrained {untrained:.5}");
-            assert!(
-                got < 0.8 * motion,
-                "{name}: {what} {got:.5}, the mean motion's {motion:.5}"
-            );
-            // The attentive model returns its observed joints by construction, trained or not.
-            assert!(
-                got < 0.8 * untrained || got.max(untrained) < 1e-6,
-                "{name}: {what} {got:.5}, an untrained model's {untrained:.5}"
-            );
-        }
+        support::assert_uses_its_observations(name, &predictor, &fresh, &held, &mean);
     }
 }
 

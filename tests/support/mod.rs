@@ -162,3 +162,40 @@ pub fn untrained(
     model.draw_weights();
     dmbn::predict::Predictor::new(model, normalization)
 }
+
+/// Asserts that `predictor` (the file `name`) reads its observations on `seqs` (interp, 5
+/// observations): its joint RMSE and image MSE, over every step and at the observed steps,
+/// below 0.8× the action's mean motion's (`mean`) and below 0.8× `untrained`'s. Both ~0
+/// passes the second: the attentive model returns its observed joints by construction,
+/// trained or not (a model that ignores its observations cannot).
+pub fn assert_uses_its_observations(
+    name: &str,
+    predictor: &dmbn::predict::Predictor,
+    untrained: &dmbn::predict::Predictor,
+    seqs: &[(&str, dmbn::data::Sequence)],
+    mean: &dmbn::quality::MeanMotion,
+) {
+    use dmbn::quality::{Quality, Scenario};
+    let (model, _, motion) = measure(predictor, seqs, Scenario::Interp, mean);
+    let (fresh, _, _) = measure(untrained, seqs, Scenario::Interp, mean);
+    println!("{name}: {model:?}\nmean motion: {motion:?}");
+    let by = |q: &Quality| {
+        [
+            ("joint RMSE", q.joint_rmse),
+            ("joint RMSE at the observed steps", q.observed_joint_rmse),
+            ("image MSE", q.image_mse),
+            ("image MSE at the observed steps", q.observed_image_mse),
+        ]
+    };
+    let rows = by(&model).into_iter().zip(by(&motion)).zip(by(&fresh));
+    for (((what, got), (_, motion)), (_, fresh)) in rows {
+        assert!(
+            got < 0.8 * motion,
+            "{name}: {what} {got:.5}, the mean motion's {motion:.5}"
+        );
+        assert!(
+            got < 0.8 * fresh || got.max(fresh) < 1e-6,
+            "{name}: {what} {got:.5}, an untrained model's {fresh:.5}"
+        );
+    }
+}
