@@ -112,12 +112,8 @@ fn export_uses_pytorch_names_layouts_and_metadata() {
         .into_data()
         .try_to_vec()
         .unwrap();
-    let view = file.tensor("decoder.shared.weight").unwrap();
-    let torch: Vec<f32> = view
-        .data()
-        .chunks_exact(4)
-        .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-        .collect();
+    let name = "decoder.shared.weight";
+    let torch = support::f32_values(name, &file.tensor(name).unwrap());
     assert_eq!(torch[5 * 128 + 3], burn[3 * 1024 + 5]);
     let header = dmbn::model::safetensors_file::read_metadata(&exported).unwrap();
     assert_eq!(header.config, config);
@@ -302,16 +298,6 @@ fn the_cli_exports_and_imports_and_names_the_file_in_errors() {
     assert!(!bad.exists());
 }
 
-/// The floats of tensor `name` in a safetensors file.
-fn floats(file: &SafeTensors, name: &str) -> Vec<f32> {
-    let view = file.tensor(name).unwrap();
-    assert_eq!(view.dtype(), Dtype::F32, "{name}");
-    view.data()
-        .chunks_exact(4)
-        .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-        .collect()
-}
-
 #[test]
 fn the_pytorch_twin_predicts_what_dmbn_predict_does() {
     let Some(python) = support::python_with_torch() else {
@@ -390,10 +376,22 @@ fn the_pytorch_twin_predicts_what_dmbn_predict_does() {
                 let prediction = dmbn::predict::SequencePrediction {
                     image_size: 64,
                     times: Vec::new(),
-                    image_mean: floats(&file, "image_mean"),
-                    image_sigma: floats(&file, "image_sigma"),
-                    joint_mean: floats(&file, "joint_mean"),
-                    joint_sigma: floats(&file, "joint_sigma"),
+                    image_mean: support::f32_values(
+                        "image_mean",
+                        &file.tensor("image_mean").unwrap(),
+                    ),
+                    image_sigma: support::f32_values(
+                        "image_sigma",
+                        &file.tensor("image_sigma").unwrap(),
+                    ),
+                    joint_mean: support::f32_values(
+                        "joint_mean",
+                        &file.tensor("joint_mean").unwrap(),
+                    ),
+                    joint_sigma: support::f32_values(
+                        "joint_sigma",
+                        &file.tensor("joint_sigma").unwrap(),
+                    ),
                 };
                 let (diff, at) =
                     golden::max_diff(&golden::sample(&prediction), &golden::expected());

@@ -12,6 +12,7 @@
 mod golden;
 #[path = "golden/score.rs"]
 mod golden_score;
+mod support;
 
 use std::collections::HashMap;
 
@@ -19,7 +20,7 @@ use dmbn::model::export_safetensors;
 use dmbn::predict::{Observations, Predictor};
 use dmbn::quality::Scenario;
 use dmbn::sim::{episode, Action};
-use safetensors::{Dtype, SafeTensors};
+use safetensors::SafeTensors;
 
 /// The exported tensors by name: shape and values.
 struct Weights(HashMap<String, (Vec<usize>, Vec<f32>)>);
@@ -201,12 +202,7 @@ fn a_plain_reference_reproduces_the_golden_prediction() {
         file.tensors()
             .into_iter()
             .map(|(name, view)| {
-                assert_eq!(view.dtype(), Dtype::F32, "{name}");
-                let values = view
-                    .data()
-                    .chunks_exact(4)
-                    .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-                    .collect();
+                let values = support::f32_values(&name, &view);
                 (name, (view.shape().to_vec(), values))
             })
             .collect(),

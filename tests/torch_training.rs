@@ -25,7 +25,7 @@ use dmbn::sim::Action;
 use rand::SeedableRng;
 use rand_pcg::Pcg64;
 use safetensors::tensor::TensorView;
-use safetensors::{Dtype, SafeTensors};
+use safetensors::Dtype;
 
 /// Runs `command`, failing the test with its output unless it succeeds; returns its stdout.
 fn run(command: &mut Command) -> String {
@@ -36,26 +36,6 @@ fn run(command: &mut Command) -> String {
     );
     assert!(out.status.success(), "{command:?}\n{stdout}\n{stderr}");
     stdout.into_owned()
-}
-
-/// The f32 values of every tensor of a safetensors file, by name.
-fn tensors_of(bytes: &[u8]) -> HashMap<String, Vec<f32>> {
-    let file = SafeTensors::deserialize(bytes).unwrap();
-    file.tensors()
-        .into_iter()
-        .map(|(name, view)| {
-            let values = match view.dtype() {
-                Dtype::F32 => view
-                    .data()
-                    .chunks_exact(4)
-                    .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-                    .collect(),
-                Dtype::U8 => view.data().iter().map(|&b| f32::from(b)).collect(),
-                other => panic!("{name}: {other:?}"),
-            };
-            (name, values)
-        })
-        .collect()
 }
 
 /// The largest absolute difference between two equally long lists.
@@ -116,7 +96,7 @@ fn the_twin_reads_a_dataset_as_the_rust_reader_does() {
         .args(["-c", script])
         .arg(&root)
         .arg(&read));
-    let twin = tensors_of(&std::fs::read(&read).unwrap());
+    let twin = support::safetensors_values(&std::fs::read(&read).unwrap());
     for size in [128, 64, 96] {
         let seq = dataset.read(&dataset.sequences()[0], Some(size)).unwrap();
         let frames: Vec<f32> = seq.frames.iter().map(|&b| f32::from(b)).collect();
@@ -257,8 +237,8 @@ fn the_twin_computes_the_loss_and_gradients_the_rust_trainer_does() {
             .arg(&weights)
             .arg(&batch_file)
             .arg(&out));
-        let twin = tensors_of(&std::fs::read(&out).unwrap());
-        let rust = tensors_of(&rust_grads);
+        let twin = support::safetensors_values(&std::fs::read(&out).unwrap());
+        let rust = support::safetensors_values(&rust_grads);
         let want = [
             values.total,
             values.image_nll,
@@ -363,7 +343,9 @@ fn two_ddp_processes_take_the_steps_of_one_a_resumed_run_too_and_dmbn_imports_th
     assert!(said.contains("step 3/3"), "{said}");
 
     // The same weights after 3 steps, up to float summation order.
-    let read = |run: &Path| tensors_of(&std::fs::read(run.join("model.safetensors")).unwrap());
+    let read = |run: &Path| {
+        support::safetensors_values(&std::fs::read(run.join("model.safetensors")).unwrap())
+    };
     let (a, b, resumed) = (read(&one), read(&two), read(&part));
     assert_eq!(a.len(), b.len());
     let worst = a

@@ -667,24 +667,6 @@ fn devices_are_parsed_and_a_backend_not_built_says_how_to_build_it() {
     }
 }
 
-/// The exported (PyTorch-named) tensors of a model file.
-fn tensors_of(file: &[u8]) -> std::collections::HashMap<String, Vec<f32>> {
-    let st = dmbn::model::export_safetensors(file, false).unwrap();
-    let parsed = safetensors::SafeTensors::deserialize(&st).unwrap();
-    parsed
-        .tensors()
-        .into_iter()
-        .map(|(name, view)| {
-            let values = view
-                .data()
-                .chunks_exact(4)
-                .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-                .collect();
-            (name, values)
-        })
-        .collect()
-}
-
 #[test]
 fn glorot_initialization_draws_the_original_keras_weights_and_trains_them() {
     let tmp = tempfile::tempdir().unwrap();
@@ -697,7 +679,9 @@ fn glorot_initialization_draws_the_original_keras_weights_and_trains_them() {
         config.lr = lr;
         let out = tmp.path().join(name);
         run_to_the_end(&data, &out, config);
-        tensors_of(&std::fs::read(out.join("model.dmbn")).unwrap())
+        let file = std::fs::read(out.join("model.dmbn")).unwrap();
+        // The exported (PyTorch-named) tensors.
+        support::safetensors_values(&dmbn::model::export_safetensors(&file, false).unwrap())
     };
     use dmbn::model::Initialization::{Glorot, He};
     // A learning rate too small to move anything: the weights as drawn.

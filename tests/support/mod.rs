@@ -199,3 +199,29 @@ pub fn assert_uses_its_observations(
         );
     }
 }
+
+/// The values of an f32 safetensors tensor (panics, naming it, on another dtype).
+#[cfg(not(target_arch = "wasm32"))]
+pub fn f32_values(name: &str, view: &safetensors::tensor::TensorView) -> Vec<f32> {
+    assert_eq!(view.dtype(), safetensors::Dtype::F32, "{name}");
+    view.data()
+        .chunks_exact(4)
+        .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+        .collect()
+}
+
+/// Every tensor of safetensors bytes as f32 values, by name (u8 tensors widened).
+#[cfg(not(target_arch = "wasm32"))]
+pub fn safetensors_values(bytes: &[u8]) -> std::collections::HashMap<String, Vec<f32>> {
+    let file = safetensors::SafeTensors::deserialize(bytes).unwrap();
+    file.tensors()
+        .into_iter()
+        .map(|(name, view)| {
+            let values = match view.dtype() {
+                safetensors::Dtype::U8 => view.data().iter().map(|&b| f32::from(b)).collect(),
+                _ => f32_values(&name, &view),
+            };
+            (name, values)
+        })
+        .collect()
+}
