@@ -74,6 +74,9 @@ fn the_joint_sigma_scale_survives_export_and_import() {
     let scaled = with_joint_sigma_scale(&bytes, 1.3).unwrap();
     let back = import_safetensors(&export_safetensors(&scaled, false).unwrap(), false).unwrap();
     assert_eq!(read_header(&back).unwrap().joint_sigma_scale, Some(1.3));
+    // A file without a scale (the paper-recipe DMBN is shipped uncalibrated) gets none.
+    let bytes = std::fs::read(support::asset("models/dmbn-paper-2020.dmbn")).unwrap();
+    assert_eq!(read_header(&bytes).unwrap().joint_sigma_scale, None);
     let plain = import_safetensors(&export_safetensors(&bytes, false).unwrap(), false).unwrap();
     assert_eq!(read_header(&plain).unwrap().joint_sigma_scale, None);
 }
