@@ -2,8 +2,9 @@
 //! adapter the machine has; CI gives it a software Vulkan driver (Debian's
 //! `mesa-vulkan-drivers`, lavapipe: `bash .ci/gpu`). From the same weights and batches, a step
 //! on wgpu gives the CPU's losses within a stated tolerance, twice (so the gradients and the
-//! Adam update agree too), and the loss falls when training on. Without an adapter the tests
-//! are reported as skipped. Native only.
+//! Adam update agree too), the loss falls when training on, and a batch split between two
+//! wgpu devices (the one adapter twice: replicas on threads, their gradients summed) gives
+//! one device's losses. Without an adapter the tests are reported as skipped. Native only.
 #![cfg(all(feature = "wgpu", not(target_arch = "wasm32")))]
 
 mod support;
@@ -14,7 +15,7 @@ use std::path::Path;
 use burn::tensor::{DeviceKind, Tensor};
 use dmbn::model::{ModelConfig, ModelKind};
 use dmbn::sim::Action;
-use dmbn::train::{TrainConfig, TrainDevice, Trainer};
+use dmbn::train::{TrainConfig, TrainDevice, TrainDevices, Trainer};
 
 /// Relative tolerance of a wgpu loss against the CPU's: f32 kernels summing in other orders.
 const TOLERANCE: f32 = 2e-3;
@@ -61,7 +62,7 @@ fn a_wgpu_step_gives_the_cpus_losses() {
         let config = small(kind, 2, &init);
         let run = |device: TrainDevice| {
             let out = tmp.path().join(format!("{file}-{device}"));
-            let mut trainer = Trainer::new_on(device, &data, &out, config.clone()).unwrap();
+            let mut trainer = Trainer::new_on(&device.into(), &data, &out, config.clone()).unwrap();
             [trainer.step().unwrap().0, trainer.step().unwrap().0]
         };
         let (cpu, gpu) = (run(TrainDevice::Cpu), run(TrainDevice::Wgpu(None)));
@@ -96,10 +97,38 @@ fn the_loss_falls_when_training_on_wgpu() {
     config.init = None;
     config.lr = 3e-4;
     let out = tmp.path().join("out");
-    let mut trainer = Trainer::new_on(TrainDevice::Wgpu(None), &data, &out, config).unwrap();
+    let mut trainer =
+        Trainer::new_on(&TrainDevice::Wgpu(None).into(), &data, &out, config).unwrap();
     let losses: Vec<f32> = (0..30).map(|_| trainer.step().unwrap().0.total).collect();
     let mean = |s: &[f32]| s.iter().sum::<f32>() / s.len() as f32;
     let (first, last) = (mean(&losses[..5]), mean(&losses[25..]));
     println!("wgpu losses: {losses:?}");
     assert!(last < first - 0.05, "loss {first} -> {last}");
+}
+
+#[test]
+fn a_batch_split_between_two_wgpu_devices_gives_one_device_s_losses() {
+    if !wgpu_adapter() {
+        return;
+    }
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("data");
+    support::simulated_dataset(&data, 0..2, &Action::ALL, 500);
+    let config = small(ModelKind::Pte, 2, &support::asset("models/pte-sim.dmbn"));
+    let run = |devices: &str| {
+        let out = tmp.path().join(devices);
+        let devices: TrainDevices = devices.parse().unwrap();
+        let mut trainer = Trainer::new_on(&devices, &data, &out, config.clone()).unwrap();
+        [trainer.step().unwrap().0, trainer.step().unwrap().0]
+    };
+    let (one, two) = (run("wgpu"), run("wgpu,wgpu"));
+    for (step, (a, b)) in one.iter().zip(&two).enumerate() {
+        println!("step {step}: one device {}, two {}", a.total, b.total);
+        assert!(
+            (a.total - b.total).abs() <= TOLERANCE * a.total.abs().max(1.0),
+            "step {step}: one device {}, two {}",
+            a.total,
+            b.total
+        );
+    }
 }

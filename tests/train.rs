@@ -1,6 +1,7 @@
 //! Training: the loss falls on a tiny generated dataset, `resume` reproduces the uninterrupted
 //! run exactly (a finished run extended, and a cosine-schedule run killed between checkpoints),
-//! a non-finite loss stops with a clear error and keeps the last checkpoint, and bad settings
+//! a non-finite loss stops with a clear error and keeps the last checkpoint, a batch split
+//! between devices (`--devices cpu,cpu`) takes the single device's steps, and bad settings
 //! are refused.
 #![cfg(not(target_arch = "wasm32"))]
 
@@ -13,7 +14,9 @@ use std::sync::Mutex;
 use dmbn::model::{read_header, ModelConfig, ModelKind, WeightDType};
 use dmbn::predict::{Observations, Predictor};
 use dmbn::sim::{episode, Action};
-use dmbn::train::{Checkpoint, Metrics, Schedule, TrainConfig, TrainDevice, TrainError, Trainer};
+use dmbn::train::{
+    Checkpoint, Metrics, Schedule, TrainConfig, TrainDevice, TrainDevices, TrainError, Trainer,
+};
 
 /// A dataset of `n` ids × both actions from the simulator.
 fn dataset(dir: &Path, n: u32) {
@@ -43,9 +46,19 @@ fn metrics(out: &Path) -> Vec<Metrics> {
 /// Trainers seed burn's generator, which the tests running beside each other share: they are
 /// built one at a time, so each run's weights come from its seed alone.
 fn new_trainer(data: &Path, out: &Path, config: TrainConfig) -> Result<Trainer, TrainError> {
+    new_trainer_on("cpu", data, out, config)
+}
+
+/// [`new_trainer`] on `devices` (`train --devices`).
+fn new_trainer_on(
+    devices: &str,
+    data: &Path,
+    out: &Path,
+    config: TrainConfig,
+) -> Result<Trainer, TrainError> {
     static TURN: Mutex<()> = Mutex::new(());
     let _turn = TURN.lock().unwrap_or_else(|e| e.into_inner());
-    Trainer::new(data, out, config)
+    Trainer::new_on(&devices.parse().unwrap(), data, out, config)
 }
 
 #[test]
@@ -728,4 +741,134 @@ fn glorot_initialization_draws_the_original_keras_weights_and_trains_them() {
         .err()
         .unwrap();
     assert!(err.to_string().contains("initialization"), "{err}");
+}
+
+/// Relative tolerance of a data-parallel run's losses and weights against one device's: the
+/// same sums in another order (the shards' gradients are added after the backward pass), so
+/// f32 rounding only (under 4e-7 here; leaving out the 1/N on the shards' losses moves them
+/// by 4e-4 within 4 steps).
+const SPLIT_TOLERANCE: f32 = 1e-5;
+
+/// `a` and `b` within [`SPLIT_TOLERANCE`] of the larger of `|a|` and 1 (`what` in the message).
+fn assert_close(a: f32, b: f32, what: &str) {
+    assert!(
+        (a - b).abs() <= SPLIT_TOLERANCE * a.abs().max(1.0),
+        "{what}: one device {a}, split {b}"
+    );
+}
+
+/// Every loss of each step's line, training and validation.
+fn losses(m: &Metrics) -> Vec<(&'static str, Option<f32>)> {
+    vec![
+        ("loss", Some(m.loss)),
+        ("image_nll", Some(m.image_nll)),
+        ("joint_nll", Some(m.joint_nll)),
+        ("image_mse", Some(m.image_mse)),
+        ("joint_mse", Some(m.joint_mse)),
+        ("val_loss", m.val_loss),
+        ("val_context_loss", m.val_context_loss),
+    ]
+}
+
+/// The final model's weights by (exported) name.
+fn final_weights(out: &Path) -> std::collections::HashMap<String, Vec<f32>> {
+    let file = std::fs::read(out.join("model.dmbn")).unwrap();
+    support::safetensors_values(&dmbn::model::export_safetensors(&file, false).unwrap())
+}
+
+#[test]
+fn a_batch_split_between_devices_takes_the_single_device_s_steps() {
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("data");
+    dataset(&data, 3);
+    let mut config = small(ModelKind::Pte, 4);
+    config.batch = 4;
+    config.joint_targets = 2;
+    let one = tmp.path().join("one");
+    run_to_the_end(&data, &one, config.clone());
+    let two = tmp.path().join("two");
+    new_trainer_on("cpu,cpu", &data, &two, config.clone())
+        .unwrap()
+        .run(|_| {})
+        .unwrap();
+    // Half a run on one device, resumed on four (a checkpoint moves between device lists).
+    let four = tmp.path().join("four");
+    let mut half = config.clone();
+    half.steps = 2;
+    run_to_the_end(&data, &four, half);
+    let mut resumed =
+        Trainer::resume_on(&"cpu,cpu,cpu,cpu".parse().unwrap(), None, &four, Some(4)).unwrap();
+    resumed.run(|_| {}).unwrap();
+
+    let reference = metrics(&one);
+    let expected = final_weights(&one);
+    for split in [&two, &four] {
+        let name = split.file_name().unwrap().to_string_lossy();
+        let m = metrics(split);
+        assert_eq!(m.len(), reference.len(), "{name}");
+        for (a, b) in reference.iter().zip(&m) {
+            assert_eq!(a.step, b.step);
+            for ((what, x), (_, y)) in losses(a).into_iter().zip(losses(b)) {
+                let what = format!("{name}, step {}, {what}", a.step);
+                match (x, y) {
+                    (Some(x), Some(y)) => assert_close(x, y, &what),
+                    (x, y) => assert_eq!(x.is_some(), y.is_some(), "{what}"),
+                }
+            }
+        }
+        let weights = final_weights(split);
+        assert_eq!(weights.len(), expected.len(), "{name}");
+        for (tensor, want) in &expected {
+            for (i, (x, y)) in want.iter().zip(&weights[tensor]).enumerate() {
+                assert_close(*x, *y, &format!("{name}, {tensor}[{i}]"));
+            }
+        }
+    }
+}
+
+#[test]
+fn a_batch_that_does_not_split_evenly_and_bad_device_lists_are_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("data");
+    dataset(&data, 1);
+    let mut config = small(ModelKind::Pte, 2);
+    config.batch = 3;
+    let err = new_trainer_on("cpu,cpu", &data, &tmp.path().join("a"), config.clone())
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(
+        err.contains("--batch 3") && err.contains("--devices cpu,cpu"),
+        "{err}"
+    );
+    assert!(!tmp.path().join("a").exists(), "nothing written");
+    // A checkpoint's batch too, when resumed on more devices.
+    let out = tmp.path().join("b");
+    run_to_the_end(&data, &out, config);
+    let devices: TrainDevices = "cpu,cpu".parse().unwrap();
+    let err = Trainer::resume_on(&devices, None, &out, Some(3))
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(err.contains("--batch 3"), "{err}");
+    // The command line refuses bad lists, naming what is wrong, without panicking.
+    for (devices, says) in [
+        ("wgpu:x", "must be a number"),
+        ("", "no device given"),
+        ("cpu,", "device 2 is empty"),
+        ("cpu,gpu", "expected cpu, wgpu"),
+    ] {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_train"))
+            .args(["--model", "pte", "--steps", "1", "--batch", "2"])
+            .args(["--devices", devices, "--data"])
+            .arg(&data)
+            .arg("--out")
+            .arg(tmp.path().join("c"))
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{devices:?}: {stderr}");
+        assert!(stderr.contains(says), "{devices:?}: {stderr}");
+        assert!(!stderr.contains("panicked"), "{devices:?}: {stderr}");
+    }
 }

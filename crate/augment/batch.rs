@@ -111,6 +111,30 @@ impl Batch {
         self.target_times[slot] = time;
     }
 
+    /// `n` batches of `B / n` consecutive sequences each, in order (`n` dividing `B`): a step's
+    /// batch shared between devices. Each keeps the N context slots, so the shards' losses
+    /// are the batch's, piece by piece.
+    pub fn shards(&self, n: usize) -> Vec<Batch> {
+        let k = self.batch / n.max(1);
+        (0..n)
+            .map(|i| {
+                let rows = |values: &[f32]| sequences(values, self.batch, i * k..(i + 1) * k);
+                Batch {
+                    batch: k,
+                    context_images: rows(&self.context_images),
+                    context_joints: rows(&self.context_joints),
+                    context_times: rows(&self.context_times),
+                    context_mask: rows(&self.context_mask),
+                    target_images: rows(&self.target_images),
+                    target_joints: rows(&self.target_joints),
+                    target_times: rows(&self.target_times),
+                    blend: rows(&self.blend),
+                    ..*self
+                }
+            })
+            .collect()
+    }
+
     /// The same contexts with themselves as targets (N targets per sequence, each sequence's
     /// real contexts repeated in order to fill the padding slots): how well a model reproduces
     /// what it observed.
@@ -143,6 +167,12 @@ impl Batch {
     }
 }
 
+/// The values of sequences `range` of a `[B, …]` array of `b` sequences (empty stays empty).
+pub(super) fn sequences(values: &[f32], b: usize, range: std::ops::Range<usize>) -> Vec<f32> {
+    let per = values.len() / b.max(1);
+    values[range.start * per..range.end * per].to_vec()
+}
+
 /// One step's frame (`S`-pixel RGB bytes) and joints into slot `slot` of `images` and `values`.
 fn put(
     s: usize,
@@ -164,5 +194,69 @@ pub fn planar(rgb: &[u8], s: usize, out: &mut [f32]) {
         for c in 0..3 {
             out[c * plane + p] = px[c] as f32 / 255.0;
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::augment::JointTargets;
+
+    #[test]
+    fn shards_are_the_batch_s_sequences_in_order() {
+        let mut batch = Batch::with_targets(4, 2, 3, 2);
+        for values in [
+            &mut batch.context_images,
+            &mut batch.context_joints,
+            &mut batch.context_times,
+            &mut batch.context_mask,
+            &mut batch.target_images,
+            &mut batch.target_joints,
+            &mut batch.target_times,
+            &mut batch.blend,
+        ] {
+            let per = values.len() / 4;
+            for (i, v) in values.iter_mut().enumerate() {
+                *v = (i / per) as f32;
+            }
+        }
+        let shards = batch.shards(2);
+        assert_eq!(shards.len(), 2);
+        for (i, shard) in shards.iter().enumerate() {
+            assert_eq!(
+                (shard.batch, shard.contexts, shard.targets, shard.image_size),
+                (2, 2, 3, 2)
+            );
+            let first = 2.0 * i as f32;
+            assert_eq!(shard.blend, [first, first + 1.0]);
+            assert_eq!(shard.context_images.len(), 2 * 2 * 3 * 4);
+            assert_eq!(shard.context_images[0], first);
+            assert_eq!(*shard.target_joints.last().unwrap(), first + 1.0);
+        }
+        let join = |f: fn(&Batch) -> &Vec<f32>| -> Vec<f32> {
+            shards.iter().flat_map(f).copied().collect()
+        };
+        assert_eq!(join(|b| &b.context_images), batch.context_images);
+        assert_eq!(join(|b| &b.target_times), batch.target_times);
+        assert_eq!(batch.shards(1), [batch.clone()]);
+        // Inference batches have no target frames: their shards neither.
+        assert!(Batch::contexts_only(4, 2, 3, 2).shards(4)[3]
+            .target_images
+            .is_empty());
+
+        let joints = JointTargets {
+            batch: 4,
+            targets: 2,
+            times: (0..8).map(|i| i as f32).collect(),
+            joints: vec![0.0; 8 * JOINTS],
+        };
+        let shards = joints.shards(2);
+        assert_eq!(shards[1].times, [4.0, 5.0, 6.0, 7.0]);
+        assert_eq!((shards[1].batch, shards[1].joints.len()), (2, 4 * JOINTS));
+        let none = JointTargets {
+            batch: 4,
+            ..JointTargets::default()
+        };
+        assert_eq!(none.shards(4)[0].batch, 1);
     }
 }

@@ -63,6 +63,35 @@ impl Loss {
     }
 }
 
+impl LossValues {
+    /// The mean of several batches' values, each part on its own (zero for none): the
+    /// validation batches', or a step's shards' when the batch is split between devices.
+    pub fn mean(values: &[LossValues]) -> LossValues {
+        let mut sum = LossValues {
+            total: 0.0,
+            image_nll: 0.0,
+            joint_nll: 0.0,
+            image_mse: 0.0,
+            joint_mse: 0.0,
+        };
+        for v in values {
+            sum.total += v.total;
+            sum.image_nll += v.image_nll;
+            sum.joint_nll += v.joint_nll;
+            sum.image_mse += v.image_mse;
+            sum.joint_mse += v.joint_mse;
+        }
+        let n = values.len().max(1) as f32;
+        LossValues {
+            total: sum.total / n,
+            image_nll: sum.image_nll / n,
+            joint_nll: sum.joint_nll / n,
+            image_mse: sum.image_mse / n,
+            joint_mse: sum.joint_mse / n,
+        }
+    }
+}
+
 /// The Gaussian negative log-likelihood of the targets under the prediction, per value:
 /// `½·log(2π) + log σ + (x − μ)² / (2σ²)` (burn's `GaussianNLLLoss` with the constant, so the
 /// numbers are true negative log-densities in nats), averaged over every value of a

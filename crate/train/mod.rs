@@ -1,12 +1,14 @@
 //! Training (native only): batched context/target sampling, Adam with gradient clipping and a
 //! learning-rate schedule, a held-out validation split, JSON-lines metrics, and atomic
-//! checkpoints that `--resume` continues exactly.
+//! checkpoints that `--resume` continues exactly; on one device or, the batch split, several.
 mod checkpoint;
 mod config;
+mod data_parallel;
 mod error;
 mod metrics;
 mod split;
 mod train_device;
+mod train_devices;
 mod trainer;
 mod val_quality;
 
@@ -16,5 +18,6 @@ pub use error::TrainError;
 pub use metrics::{Metrics, MetricsLog};
 pub use split::Split;
 pub use train_device::TrainDevice;
+pub use train_devices::TrainDevices;
 pub use trainer::{Progress, Trainer};
 pub use val_quality::ValQuality;

@@ -2,22 +2,20 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use burn::optim::grad_clipping::GradientClippingConfig;
-use burn::optim::{AdamConfig, GradientsParams, ModuleOptimizer};
+use burn::optim::{AdamConfig, ModuleOptimizer};
 use burn::tensor::{Bytes, Device};
 use rand::SeedableRng;
 use rand_pcg::Pcg64;
 
 use crate::augment::{Batch, Sampler, SamplerConfig};
 use crate::data::{write_atomic, Sequence};
-use crate::model::{
-    self, glorot, joint_nll, joint_target_tensors, tensors, Initialization, LossValues, Model,
-    Normalization,
-};
+use crate::model::{self, glorot, tensors, Initialization, LossValues, Model, Normalization};
 use crate::predict::Predictor;
 
+use super::data_parallel::gradients;
 use super::{
-    Checkpoint, CheckpointState, Metrics, MetricsLog, Split, TrainConfig, TrainDevice, TrainError,
-    ValQuality,
+    Checkpoint, CheckpointState, Metrics, MetricsLog, Split, TrainConfig, TrainDevice,
+    TrainDevices, TrainError, ValQuality,
 };
 
 /// Separate random streams: validation batches never shift the training stream.
@@ -51,25 +49,30 @@ pub struct Trainer {
     best_quality: Option<(u64, f32)>,
     /// The dataset root, recorded in checkpoints.
     data: Option<PathBuf>,
+    /// Where the model lives: the first of `devices`.
     device: Device,
+    /// The devices each step's batch is split between.
+    devices: Vec<Device>,
 }
 
 impl Trainer {
     /// A fresh run on the dataset at `data`, writing into `out` (which must hold no checkpoint:
     /// continue such a run with [`Trainer::resume`]), on the CPU.
     pub fn new(data: &Path, out: &Path, config: TrainConfig) -> Result<Trainer, TrainError> {
-        Self::new_on(TrainDevice::Cpu, data, out, config)
+        Self::new_on(&TrainDevice::Cpu.into(), data, out, config)
     }
 
-    /// [`Trainer::new`] on `device`.
+    /// [`Trainer::new`] on `devices` (several: each step's batch split between them).
     pub fn new_on(
-        device: TrainDevice,
+        devices: &TrainDevices,
         data: &Path,
         out: &Path,
         config: TrainConfig,
     ) -> Result<Trainer, TrainError> {
         config.validate()?;
-        let device = device.device()?;
+        devices.check_batch(config.batch)?;
+        let devices = devices.devices()?;
+        let device = devices[0].clone();
         if Checkpoint::read(out).is_ok() {
             return Err(TrainError::config(
                 "out",
@@ -122,7 +125,9 @@ impl Trainer {
             best_quality: None,
             data: Some(std::path::absolute(data).unwrap_or_else(|_| data.to_path_buf())),
         };
-        Ok(Self::assemble(state, out, model, optim, split, log, device))
+        Ok(Self::assemble(
+            state, out, model, optim, split, log, devices,
+        ))
     }
 
     /// Continue the run in `out` from its last checkpoint, with the same settings, on `data`
@@ -133,22 +138,25 @@ impl Trainer {
         out: &Path,
         steps: Option<u64>,
     ) -> Result<Trainer, TrainError> {
-        Self::resume_on(TrainDevice::Cpu, data, out, steps)
+        Self::resume_on(&TrainDevice::Cpu.into(), data, out, steps)
     }
 
-    /// [`Trainer::resume`] on `device` (a run may move between devices at a checkpoint).
+    /// [`Trainer::resume`] on `devices` (a run may move between devices, and change their
+    /// number, at a checkpoint).
     pub fn resume_on(
-        device: TrainDevice,
+        devices: &TrainDevices,
         data: Option<&Path>,
         out: &Path,
         steps: Option<u64>,
     ) -> Result<Trainer, TrainError> {
-        let device = device.device()?;
         let (model_bytes, optim_bytes, mut state) = Checkpoint::read(out)?;
         if let Some(steps) = steps {
             state.config.steps = steps;
         }
         state.config.validate()?;
+        devices.check_batch(state.config.batch)?;
+        let devices = devices.devices()?;
+        let device = devices[0].clone();
         let data = match data {
             Some(data) => data.to_path_buf(),
             None => state.data.clone().ok_or_else(|| {
@@ -175,7 +183,9 @@ impl Trainer {
                 message: format!("optimizer.bpk: {e:?}"),
             })?;
         let log = MetricsLog::open(&out.join("metrics.jsonl"), Some(state.step))?;
-        Ok(Self::assemble(state, out, model, optim, split, log, device))
+        Ok(Self::assemble(
+            state, out, model, optim, split, log, devices,
+        ))
     }
 
     /// A trainer from where a run stands (a fresh run's state at step 0, or a checkpoint's).
@@ -186,7 +196,7 @@ impl Trainer {
         optim: ModuleOptimizer,
         split: Split,
         log: MetricsLog,
-        device: Device,
+        devices: Vec<Device>,
     ) -> Trainer {
         let CheckpointState {
             step,
@@ -237,7 +247,8 @@ impl Trainer {
             best_val,
             best_quality,
             data,
-            device,
+            device: devices[0].clone(),
+            devices,
         }
     }
 
@@ -278,32 +289,19 @@ impl Trainer {
         let (batch, joint_targets) =
             self.sampler
                 .sample_with_joints(&self.split.train, &self.normalization, &mut self.rng);
-        let batch = tensors(&batch, &self.device)?;
-        let representation = self.model.encode(&batch)?;
-        let prediction = self
-            .model
-            .decode(&representation, batch.target_times.clone())?;
-        let mut loss = self.model.loss(&prediction, &batch, self.config.beta_nll)?;
-        if let (Some(drawn), Some(frames)) = (&prediction.image_drawn, &batch.target_images) {
-            if self.config.drawn_frame_weight > 0.0 {
-                let mse = (drawn.clone() - frames.clone()).square().mean();
-                loss.total = loss.total + mse.mul_scalar(self.config.drawn_frame_weight);
-            }
-        }
-        if joint_targets.targets > 0 {
-            let (times, joints) = joint_target_tensors(&joint_targets, &self.device)?;
-            let (mean, sigma) = self.model.decode_joints(&representation, times)?;
-            let nll = joint_nll(mean, sigma, joints, self.config.beta_nll);
-            loss.total = loss.total + nll.mul_scalar(self.config.model.joint_weight);
-        }
-        let values = loss.values();
+        let (values, grads) = gradients(
+            &self.model,
+            &batch,
+            &joint_targets,
+            &self.config,
+            &self.devices,
+        )?;
         if !values.total.is_finite() {
             return Err(TrainError::NonFinite {
                 step: self.step + 1,
                 value: values.total,
             });
         }
-        let grads = GradientsParams::from_grads(loss.total.backward(), &self.model);
         let lr = self
             .config
             .schedule
@@ -325,31 +323,15 @@ impl Trainer {
     }
 
     fn mean_loss(&self, batches: &[Batch]) -> Result<LossValues, TrainError> {
-        let mut sum = LossValues {
-            total: 0.0,
-            image_nll: 0.0,
-            joint_nll: 0.0,
-            image_mse: 0.0,
-            joint_mse: 0.0,
-        };
-        for batch in batches {
-            let batch = tensors(batch, &self.device)?;
-            let prediction = self.model.forward(&batch)?;
-            let v = self.model.loss(&prediction, &batch, 0.0)?.values();
-            sum.total += v.total;
-            sum.image_nll += v.image_nll;
-            sum.joint_nll += v.joint_nll;
-            sum.image_mse += v.image_mse;
-            sum.joint_mse += v.joint_mse;
-        }
-        let n = batches.len().max(1) as f32;
-        Ok(LossValues {
-            total: sum.total / n,
-            image_nll: sum.image_nll / n,
-            joint_nll: sum.joint_nll / n,
-            image_mse: sum.image_mse / n,
-            joint_mse: sum.joint_mse / n,
-        })
+        let values = batches
+            .iter()
+            .map(|batch| {
+                let batch = tensors(batch, &self.device)?;
+                let prediction = self.model.forward(&batch)?;
+                Ok(self.model.loss(&prediction, &batch, 0.0)?.values())
+            })
+            .collect::<Result<Vec<_>, TrainError>>()?;
+        Ok(LossValues::mean(&values))
     }
 
     /// Train to `config.steps`, validating, logging and checkpointing on the way; writes the

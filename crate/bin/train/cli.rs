@@ -8,7 +8,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use dmbn::augment::TimeWarpConfig;
 use dmbn::data::id_list;
 use dmbn::model::{read_header, Initialization, ModelConfig, ModelKind};
-use dmbn::train::{Schedule, TrainConfig, TrainDevice, TrainError, Trainer};
+use dmbn::train::{Schedule, TrainConfig, TrainDevices, TrainError, Trainer};
 
 /// `--model`: the command line's names of [`ModelKind`].
 #[derive(Clone, Copy, ValueEnum)]
@@ -173,9 +173,16 @@ struct Args {
     resume: bool,
     /// Where to train: cpu, wgpu (burn's wgpu backend: Vulkan, Metal or DX12; wgpu's choice
     /// of adapter), wgpu:N (the N-th discrete GPU) or cuda[:N]. The GPU backends are cargo
-    /// features (`--features wgpu`, `--features cuda`); a run may resume on another device.
-    #[arg(long, default_value = "cpu", value_parser = |s: &str| s.parse::<TrainDevice>())]
-    device: TrainDevice,
+    /// features (`--features wgpu`, `--features cuda`). A comma-separated list (--devices
+    /// wgpu:0,wgpu:1) trains data-parallel: each step's --batch is split evenly between the
+    /// devices, the model and optimiser on the first. A run may resume on other devices.
+    #[arg(
+        long = "device",
+        visible_alias = "devices",
+        default_value = "cpu",
+        value_parser = |s: &str| s.parse::<TrainDevices>()
+    )]
+    devices: TrainDevices,
     /// Time-warp augmentation (the paper's): random sections sped up or slowed down (0.5-2x)
     /// and repeated frames inserted, in 80% of the training sequences.
     #[arg(long)]
@@ -238,7 +245,7 @@ fn run(args: Args) -> Result<(), TrainError> {
     let model = args.model.map(ModelKind::from);
     let mut trainer = if args.resume {
         let mut trainer =
-            Trainer::resume_on(args.device, args.data.as_deref(), &args.out, args.steps)?;
+            Trainer::resume_on(&args.devices, args.data.as_deref(), &args.out, args.steps)?;
         if args.half {
             trainer.write_half();
         }
@@ -330,7 +337,7 @@ fn run(args: Args) -> Result<(), TrainError> {
             InitializationArg::Glorot => Initialization::Glorot,
         };
         config.half = args.half;
-        Trainer::new_on(args.device, data, &args.out, config)?
+        Trainer::new_on(&args.devices, data, &args.out, config)?
     };
     let steps = trainer.config().steps;
     let bar = ProgressBar::new(steps).with_position(trainer.step_count());
@@ -346,7 +353,7 @@ fn run(args: Args) -> Result<(), TrainError> {
         trainer
             .data()
             .map_or("?".into(), |d| d.display().to_string()),
-        args.device,
+        args.devices,
         id_list(trainer.val_ids()),
         args.out.display()
     );
