@@ -1,14 +1,21 @@
 //! Training (native only): batched context/target sampling, Adam with gradient clipping and a
 //! learning-rate schedule, a held-out validation split, JSON-lines metrics, and atomic
 //! checkpoints that `--resume` continues exactly.
+mod batch_stream;
 mod checkpoint;
 mod config;
 mod error;
+mod frame_cache;
 mod metrics;
+mod sequence_store;
 mod split;
 mod train_device;
 mod trainer;
 mod val_quality;
+
+use batch_stream::BatchStream;
+use frame_cache::FrameCache;
+use sequence_store::SequenceStore;
 
 pub use checkpoint::{Checkpoint, CheckpointState};
 pub use config::{Schedule, TrainConfig};
