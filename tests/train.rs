@@ -1,8 +1,9 @@
 //! Training: the loss falls on a tiny generated dataset, `resume` reproduces the uninterrupted
 //! run exactly (a finished run extended, and a cosine-schedule run killed between checkpoints),
-//! a non-finite loss stops with a clear error and keeps the last checkpoint, a batch split
-//! between devices (`--devices cpu,cpu`) takes the single device's steps, and bad settings
-//! are refused.
+//! the frame cache's size changes no step, frames gone bad mid-run stop it with an error
+//! naming them, a non-finite loss stops with a clear error and keeps the last checkpoint, a
+//! batch split between devices (`--devices cpu,cpu`) takes the single device's steps, and bad
+//! settings are refused.
 #![cfg(not(target_arch = "wasm32"))]
 
 mod support;
@@ -169,6 +170,62 @@ fn resume_reproduces_the_uninterrupted_run() {
         final_prediction(&whole),
         final_prediction(&parts),
         "same final weights"
+    );
+}
+
+#[test]
+fn the_frame_cache_s_size_changes_no_step() {
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("data");
+    dataset(&data, 3);
+    let run = |mib: usize| {
+        let out = tmp.path().join(format!("cache-{mib}"));
+        let mut config = small(ModelKind::Pte, 4);
+        config.frame_cache_mib = mib;
+        run_to_the_end(&data, &out, config);
+        out
+    };
+    // None kept (every frame decoded when drawn), and the whole dataset kept.
+    let (none, all) = (run(0), run(64));
+    for (x, y) in metrics(&none).iter().zip(&metrics(&all)) {
+        assert_eq!(deterministic(x), deterministic(y), "step {}", x.step);
+    }
+    assert_eq!(final_prediction(&none), final_prediction(&all));
+}
+
+#[test]
+fn frames_gone_bad_mid_run_stop_it_with_an_error_naming_the_file() {
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("data");
+    dataset(&data, 2);
+    let mut config = small(ModelKind::Pte, 20);
+    config.frame_cache_mib = 0;
+    let mut trainer = new_trainer(&data, &tmp.path().join("run"), config).unwrap();
+    trainer.step().unwrap();
+    for id in ["0", "1"] {
+        for action in Action::ALL {
+            let dir = data.join(id).join(action.name());
+            for entry in std::fs::read_dir(&dir).unwrap() {
+                let path = entry.unwrap().path();
+                if path.extension().is_some_and(|e| e == "png") {
+                    std::fs::write(&path, b"not a png").unwrap();
+                }
+            }
+        }
+    }
+    // The batches read ahead before the damage, then the error (not a panic, not a wait).
+    let error = (0..4)
+        .find_map(|_| trainer.step().err())
+        .expect("the damaged frames are noticed");
+    let message = error.to_string();
+    assert!(
+        message.starts_with(&data.display().to_string())
+            && message.contains(".png: cannot decode frame"),
+        "{message}"
+    );
+    assert!(
+        matches!(trainer.step(), Err(TrainError::Batches { .. })),
+        "and no batch after it"
     );
 }
 

@@ -6,6 +6,7 @@ mod error;
 mod eval_sequence;
 mod joint_targets;
 mod sampler;
+mod selection;
 mod time_warp;
 
 pub use batch::{planar, Batch};
@@ -13,4 +14,5 @@ pub use error::AugmentError;
 pub use eval_sequence::{EvalMode, EvalSequence};
 pub use joint_targets::JointTargets;
 pub use sampler::{Sampler, SamplerConfig};
+pub use selection::{Pick, Selection, Step};
 pub use time_warp::{gather, TimeWarpConfig};

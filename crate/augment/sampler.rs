@@ -2,9 +2,9 @@ use rand::seq::index;
 use rand::RngExt;
 use rand_pcg::Pcg64;
 
-use crate::data::{Normalization, Sequence, JOINTS};
+use crate::data::{Normalization, Sequence};
 
-use super::{Batch, JointTargets, TimeWarpConfig};
+use super::{Batch, JointTargets, Pick, Selection, Step, TimeWarpConfig};
 
 /// How training batches are drawn (the original drew one sequence, 1-5 contexts and one
 /// target per step; we batch several sequences and targets).
@@ -63,77 +63,92 @@ impl Sampler {
         norm: &Normalization,
         rng: &mut Pcg64,
     ) -> (Batch, JointTargets) {
+        let lengths: Vec<usize> = pool.iter().map(Sequence::len).collect();
+        self.draw(&lengths, rng).fill(
+            pool[0].image_size as usize,
+            norm,
+            |i| &pool[i].joints,
+            |i, k| pool[i].frame(k),
+        )
+    }
+
+    /// The random part of [`Sampler::sample_with_joints`] on a pool of sequences of
+    /// `lengths` steps: the same draws from `rng`, no frame needed.
+    pub fn draw(&self, lengths: &[usize], rng: &mut Pcg64) -> Selection {
         let cfg = self.config;
-        let mut joint_targets = JointTargets {
-            batch: cfg.batch,
-            targets: cfg.joint_targets,
-            times: Vec::with_capacity(cfg.batch * cfg.joint_targets),
-            joints: Vec::with_capacity(cfg.batch * cfg.joint_targets * JOINTS),
-        };
-        let picks: Vec<&Sequence> = (0..cfg.batch)
-            .map(|_| &pool[rng.random_range(0..pool.len())])
+        let sequences: Vec<usize> = (0..cfg.batch)
+            .map(|_| rng.random_range(0..lengths.len()))
             .collect();
-        let mut batch = Batch::with_targets(
-            cfg.batch,
-            cfg.max_contexts,
-            cfg.targets,
-            picks[0].image_size as usize,
-        );
-        for (b, seq) in picks.into_iter().enumerate() {
-            let warped = cfg.warp.map(|warp| warp.apply(seq, rng));
-            let seq = warped.as_ref().unwrap_or(seq);
-            let t = seq.len();
-            let n = rng.random_range(1..=cfg.max_contexts.min(t.saturating_sub(1)).max(1));
-            let prefix = cfg.prefix_contexts > 0.0 && rng.random::<f32>() < cfg.prefix_contexts;
-            let steps = if prefix {
-                prefix_steps(rng, t, n, cfg.targets)
-            } else {
-                index::sample(rng, t, (n + cfg.targets).min(t)).into_vec()
-            };
-            let (contexts, rest) = steps.split_at(n);
-            let targets: Vec<usize> = if cfg.contexts_in_targets {
-                contexts
-                    .iter()
-                    .chain(rest)
-                    .cycle()
-                    .take(cfg.targets)
-                    .copied()
-                    .collect()
-            } else {
-                // Short sequences: reuse non-context steps as targets.
-                (0..cfg.targets)
-                    .map(|m| {
-                        if rest.is_empty() {
-                            contexts[0]
-                        } else {
-                            rest[m % rest.len()]
-                        }
-                    })
-                    .collect()
-            };
-            fill(&mut batch, b, seq, contexts, &targets, norm);
-            batch.blend[b] =
-                if cfg.single_modality > 0.0 && rng.random::<f32>() < cfg.single_modality {
-                    if rng.random_bool(0.5) {
-                        1.0
-                    } else {
-                        0.0
-                    }
-                } else {
-                    rng.random_range(0.0f32..=1.0)
+        let picks = sequences
+            .into_iter()
+            .map(|sequence| {
+                let recorded = lengths[sequence];
+                // The recorded step behind each step of the (warped) sequence.
+                let shown = match cfg.warp {
+                    Some(warp) => warp.indices(recorded, rng),
+                    None => (0..recorded).collect(),
                 };
-            let times = if cfg.joint_targets > 0 {
-                seq.times()
-            } else {
-                Vec::new()
-            };
-            for _ in 0..cfg.joint_targets {
-                let k = rng.random_range(0..t);
-                joint_targets.times.push(times[k]);
-                joint_targets.joints.extend(norm.normalize(&seq.joints[k]));
-            }
+                let t = shown.len();
+                let step = |k: usize| Step {
+                    index: shown[k],
+                    time: Sequence::phase(k, t),
+                };
+                let n = rng.random_range(1..=cfg.max_contexts.min(t.saturating_sub(1)).max(1));
+                let prefix = cfg.prefix_contexts > 0.0 && rng.random::<f32>() < cfg.prefix_contexts;
+                let steps = if prefix {
+                    prefix_steps(rng, t, n, cfg.targets)
+                } else {
+                    index::sample(rng, t, (n + cfg.targets).min(t)).into_vec()
+                };
+                let (contexts, rest) = steps.split_at(n);
+                let targets: Vec<usize> = if cfg.contexts_in_targets {
+                    contexts
+                        .iter()
+                        .chain(rest)
+                        .cycle()
+                        .take(cfg.targets)
+                        .copied()
+                        .collect()
+                } else {
+                    // Short sequences: reuse non-context steps as targets.
+                    (0..cfg.targets)
+                        .map(|m| {
+                            if rest.is_empty() {
+                                contexts[0]
+                            } else {
+                                rest[m % rest.len()]
+                            }
+                        })
+                        .collect()
+                };
+                let blend =
+                    if cfg.single_modality > 0.0 && rng.random::<f32>() < cfg.single_modality {
+                        if rng.random_bool(0.5) {
+                            1.0
+                        } else {
+                            0.0
+                        }
+                    } else {
+                        rng.random_range(0.0f32..=1.0)
+                    };
+                let joint_targets = (0..cfg.joint_targets)
+                    .map(|_| step(rng.random_range(0..t)))
+                    .collect();
+                Pick {
+                    sequence,
+                    contexts: contexts.iter().map(|&k| step(k)).collect(),
+                    targets: targets.into_iter().map(step).collect(),
+                    joint_targets,
+                    blend,
+                }
+            })
+            .collect();
+        Selection {
+            contexts: cfg.max_contexts,
+            targets: cfg.targets,
+            joint_targets: cfg.joint_targets,
+            picks,
         }
-        (batch, joint_targets)
     }
 }
 
@@ -150,27 +165,10 @@ fn prefix_steps(rng: &mut Pcg64, t: usize, n: usize, targets: usize) -> Vec<usiz
     steps
 }
 
-/// Write sequence `seq`'s `contexts` and `targets` into slot `b` of `batch`.
-fn fill(
-    batch: &mut Batch,
-    b: usize,
-    seq: &Sequence,
-    contexts: &[usize],
-    targets: &[usize],
-    norm: &Normalization,
-) {
-    let times = seq.times();
-    for (i, &k) in contexts.iter().enumerate() {
-        batch.set_context(b, i, seq.frame(k), norm.normalize(&seq.joints[k]), times[k]);
-    }
-    for (j, &k) in targets.iter().enumerate() {
-        batch.set_target(b, j, seq.frame(k), norm.normalize(&seq.joints[k]), times[k]);
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::data::JOINTS;
     use rand::SeedableRng;
 
     /// A sequence whose frames count up byte by byte (for the layout test).
@@ -376,11 +374,31 @@ mod tests {
         blend: f32,
         norm: &Normalization,
     ) -> Batch {
-        let mut batch =
-            Batch::with_targets(1, contexts.len(), targets.len(), seq.image_size as usize);
-        fill(&mut batch, 0, seq, contexts, targets, norm);
-        batch.blend[0] = blend;
-        batch
+        let times = seq.times();
+        let steps = |ks: &[usize]| {
+            ks.iter()
+                .map(|&index| Step {
+                    index,
+                    time: times[index],
+                })
+                .collect()
+        };
+        let selection = Selection {
+            contexts: contexts.len(),
+            targets: targets.len(),
+            joint_targets: 0,
+            picks: vec![Pick {
+                sequence: 0,
+                contexts: steps(contexts),
+                targets: steps(targets),
+                joint_targets: Vec::new(),
+                blend,
+            }],
+        };
+        let (image_size, joints) = (seq.image_size as usize, &seq.joints);
+        selection
+            .fill(image_size, norm, |_| joints, |_, k| seq.frame(k))
+            .0
     }
 
     #[test]
@@ -472,6 +490,60 @@ mod tests {
         assert!(
             future_targets * 2 > others,
             "{future_targets} of {others} targets ahead"
+        );
+    }
+
+    /// The batches of a seed with every option that draws (warps, prefixes, single
+    /// modalities, joint-only targets, both target layouts): a digest of every value, fixed
+    /// so that the training stream stays the one runs were trained and resumed with.
+    #[test]
+    fn the_batches_of_a_seed_stay_the_same() {
+        use sha2::{Digest, Sha256};
+        let pool = vec![tagged(0, 20), tagged(1, 37), tagged(2, 9)];
+        let mut h = Sha256::new();
+        for (contexts_in_targets, freeze_fraction) in [(true, None), (false, Some([0.1, 0.6]))] {
+            let sampler = Sampler::new(SamplerConfig {
+                batch: 6,
+                max_contexts: 5,
+                targets: 8,
+                contexts_in_targets,
+                joint_targets: 7,
+                single_modality: 0.3,
+                prefix_contexts: 0.3,
+                warp: Some(TimeWarpConfig {
+                    probability: 0.8,
+                    freeze_probability: 0.8,
+                    freeze_fraction,
+                    ..TimeWarpConfig::default()
+                }),
+            });
+            let mut rng = Pcg64::seed_from_u64(11);
+            for _ in 0..20 {
+                let (b, j) = sampler.sample_with_joints(&pool, &norm(), &mut rng);
+                for v in [
+                    &b.context_images,
+                    &b.context_joints,
+                    &b.context_times,
+                    &b.context_mask,
+                    &b.target_images,
+                    &b.target_joints,
+                    &b.target_times,
+                    &b.blend,
+                    &j.times,
+                    &j.joints,
+                ]
+                .into_iter()
+                .flatten()
+                {
+                    h.update(v.to_le_bytes());
+                }
+            }
+            h.update(rng.random::<u64>().to_le_bytes());
+        }
+        let digest: String = h.finalize().iter().map(|b| format!("{b:02x}")).collect();
+        assert_eq!(
+            digest,
+            "6ba81877ceb96779bb453cf872d99d9564ac47a71ef3c257a5a4231bc63f0244"
         );
     }
 }

@@ -42,7 +42,7 @@ pub use layout::{
 };
 pub use memory_files::MemoryFiles;
 pub use normalization::Normalization;
-pub use reader::{read_sequence, read_sequence_from};
+pub use reader::{read_frames, read_joints, read_sequence, read_sequence_from};
 pub use sequence::{Sequence, ENDPOINT, JOINTS};
 pub use sequence_ref::SequenceRef;
 pub use sequence_writer::write_sequence;

@@ -57,20 +57,9 @@ pub fn read_sequence_from(
     let mut frames = Vec::new();
     let mut size = None;
     for path in &paths {
-        let img = read_frame(files, path)?;
-        let expected = *size.get_or_insert(img.width());
-        if img.dimensions() != (expected, expected) {
-            return Err(DataError::FrameSize {
-                path: path.clone(),
-                expected,
-                found: img.dimensions(),
-            });
-        }
-        let img = match image_size {
-            Some(target) if target != expected => resize(&img, target),
-            _ => img,
-        };
-        frames.extend_from_slice(img.as_raw());
+        let (stored, frame) = load_frame(files, path, size, image_size)?;
+        size = Some(stored);
+        frames.extend_from_slice(&frame);
     }
     Ok(Sequence {
         image_size: image_size.or(size).unwrap_or(0),
@@ -79,6 +68,68 @@ pub fn read_sequence_from(
         object,
         frames,
     })
+}
+
+/// The joints (`joint_<id>.txt`) of the sequence in `dir` alone: what training holds in memory
+/// of every sequence, reading frames only when a batch needs them ([`read_frames`]).
+pub fn read_joints(
+    files: &impl Files,
+    dir: &Path,
+    id: u32,
+) -> Result<Vec<[f32; JOINTS]>, DataError> {
+    read_table(files, &joint_path(dir, id))
+}
+
+/// Frames `steps` of the `rows`-step sequence in `dir`, each as [`read_sequence`] reads it
+/// (resized to `image_size`): a training batch decodes only the steps it holds. Each frame
+/// must be square; that all have one size is [`read_sequence`]'s check, which sees them all.
+pub fn read_frames(
+    files: &impl Files,
+    dir: &Path,
+    rows: usize,
+    steps: &[usize],
+    image_size: u32,
+) -> Result<Vec<Vec<u8>>, DataError> {
+    if image_size == 0 || image_size > MAX_IMAGE_SIZE {
+        return Err(DataError::ImageSize { size: image_size });
+    }
+    let paths = frame_paths(files, dir, rows)?;
+    steps
+        .iter()
+        .map(|&k| {
+            let path = paths.get(k).ok_or_else(|| DataError::MissingFrame {
+                dir: dir.to_path_buf(),
+                index: k,
+                missing: 1,
+                rows,
+            })?;
+            Ok(load_frame(files, path, None, Some(image_size))?.1)
+        })
+        .collect()
+}
+
+/// The frame at `path` as RGB bytes, resized to `image_size` when given, and its stored size:
+/// it must be `expected` pixels square (any square size when `None`).
+fn load_frame(
+    files: &impl Files,
+    path: &Path,
+    expected: Option<u32>,
+    image_size: Option<u32>,
+) -> Result<(u32, Vec<u8>), DataError> {
+    let img = read_frame(files, path)?;
+    let expected = expected.unwrap_or(img.width());
+    if img.dimensions() != (expected, expected) {
+        return Err(DataError::FrameSize {
+            path: path.to_path_buf(),
+            expected,
+            found: img.dimensions(),
+        });
+    }
+    let img = match image_size {
+        Some(target) if target != expected => resize(&img, target),
+        _ => img,
+    };
+    Ok((expected, img.into_raw()))
 }
 
 /// Parse a whitespace-separated table of `N` finite numbers per row. Trailing blank lines are

@@ -47,15 +47,17 @@ impl Sequence {
     /// Phase of each step, `linspace(0, 1, T)`: the time the models see.
     pub fn times(&self) -> Vec<f32> {
         let t = self.len();
-        (0..t)
-            .map(|k| {
-                if t > 1 {
-                    k as f32 / (t - 1) as f32
-                } else {
-                    0.0
-                }
-            })
-            .collect()
+        (0..t).map(|k| Sequence::phase(k, t)).collect()
+    }
+
+    /// The phase of step `k` of a `t`-step sequence (see [`Sequence::times`]): the sampler
+    /// times steps of sequences whose frames it has not read.
+    pub fn phase(k: usize, t: usize) -> f32 {
+        if t > 1 {
+            k as f32 / (t - 1) as f32
+        } else {
+            0.0
+        }
     }
 
     /// SHA-256 (hex) of the joints, endpoint, object (f32 little-endian bits) and frame bytes:

@@ -19,6 +19,8 @@ pub enum TrainError {
         field: &'static str,
         message: String,
     },
+    #[error("training batches: {message}")]
+    Batches { message: String },
     #[error("{path}: checkpoint is unreadable: {message}")]
     Checkpoint { path: PathBuf, message: String },
     #[error(

@@ -1,16 +1,24 @@
 //! Training (native only): batched context/target sampling, Adam with gradient clipping and a
 //! learning-rate schedule, a held-out validation split, JSON-lines metrics, and atomic
-//! checkpoints that `--resume` continues exactly; on one device or, the batch split, several.
+//! checkpoints that `--resume` continues exactly; on one device or, the batch split, several;
+//! the training frames read from disk as the batches need them.
+mod batch_stream;
 mod checkpoint;
 mod config;
 mod data_parallel;
 mod error;
+mod frame_cache;
 mod metrics;
+mod sequence_store;
 mod split;
 mod train_device;
 mod train_devices;
 mod trainer;
 mod val_quality;
+
+use batch_stream::BatchStream;
+use frame_cache::FrameCache;
+use sequence_store::SequenceStore;
 
 pub use checkpoint::{Checkpoint, CheckpointState};
 pub use config::{Schedule, TrainConfig};

@@ -1,6 +1,6 @@
 use std::path::Path;
 
-use crate::data::{Dataset, Sequence};
+use crate::data::{Dataset, SequenceRef};
 
 use super::TrainError;
 
@@ -8,17 +8,18 @@ use super::TrainError;
 /// one id land on the same side: the last `val_fraction` of the ids (at least one when there
 /// are two or more) are held out. `val_fraction` 0, or a dataset of one id, holds none out:
 /// the validation loss then measures training sequences ([`Split::validates_on_training_data`])
-/// and the quality benchmark (best.dmbn) does not run.
+/// and the quality benchmark (best.dmbn) does not run. Only listed: reading is the caller's
+/// (training streams its sequences' frames, the probe reads them whole).
 pub struct Split {
-    pub train: Vec<Sequence>,
-    pub val: Vec<Sequence>,
+    pub train: Vec<SequenceRef>,
+    pub val: Vec<SequenceRef>,
     /// Held-out ids.
     pub val_ids: Vec<u32>,
 }
 
 impl Split {
-    /// Read every sequence of the dataset at `image_size` and split it.
-    pub fn load(root: &Path, image_size: usize, val_fraction: f64) -> Result<Split, TrainError> {
+    /// List the sequences of the dataset at `root` and split them.
+    pub fn open(root: &Path, val_fraction: f64) -> Result<Split, TrainError> {
         if !(0.0..1.0).contains(&val_fraction) {
             return Err(TrainError::config(
                 "val_fraction",
@@ -33,15 +34,11 @@ impl Split {
             ((ids.len() as f64 * val_fraction).ceil() as usize).max(1)
         };
         let val_ids = ids[ids.len() - held..].to_vec();
-        let (mut train, mut val) = (Vec::new(), Vec::new());
-        for seq_ref in dataset.sequences() {
-            let seq = dataset.read(seq_ref, Some(image_size as u32))?;
-            if val_ids.contains(&seq_ref.id) {
-                val.push(seq);
-            } else {
-                train.push(seq);
-            }
-        }
+        let (val, train): (Vec<SequenceRef>, Vec<SequenceRef>) = dataset
+            .sequences()
+            .iter()
+            .cloned()
+            .partition(|s| val_ids.contains(&s.id));
         if train.is_empty() {
             return Err(TrainError::config(
                 "data",

@@ -14,8 +14,8 @@ use crate::predict::Predictor;
 
 use super::data_parallel::gradients;
 use super::{
-    Checkpoint, CheckpointState, Metrics, MetricsLog, Split, TrainConfig, TrainDevice,
-    TrainDevices, TrainError, ValQuality,
+    BatchStream, Checkpoint, CheckpointState, Metrics, MetricsLog, SequenceStore, Split,
+    TrainConfig, TrainDevice, TrainDevices, TrainError, ValQuality,
 };
 
 /// Separate random streams: validation batches never shift the training stream.
@@ -37,12 +37,18 @@ pub struct Trainer {
     out: PathBuf,
     model: Model,
     optim: ModuleOptimizer,
+    /// The training stream's state after the batches of the steps taken: what a checkpoint
+    /// records.
     rng: Pcg64,
     step: u64,
-    split: Split,
+    /// The next training batches, read ahead from `rng`'s state.
+    batches: BatchStream,
+    /// Held-out ids (empty: validation measures training sequences).
+    val_ids: Vec<u32>,
     normalization: Normalization,
-    sampler: Sampler,
     val_set: Vec<Batch>,
+    /// The held-out sequences the quality benchmark scores, read whole once.
+    quality_set: Vec<Sequence>,
     log: MetricsLog,
     best_val: Option<(u64, f32)>,
     /// Best [`ValQuality::score`] so far and its step: the model in `out/best.dmbn`.
@@ -80,7 +86,12 @@ impl Trainer {
             ));
         }
         std::fs::create_dir_all(out).map_err(TrainError::io(out))?;
-        let split = Split::load(data, config.model.image_size, config.val_fraction)?;
+        let split = Split::open(data, config.val_fraction)?;
+        let train = SequenceStore::open(
+            split.train.clone(),
+            config.model.image_size as u32,
+            config.frame_cache_mib << 20,
+        )?;
         device.seed(config.seed);
         let model = match &config.init {
             Some(path) => {
@@ -113,8 +124,7 @@ impl Trainer {
         // for a run on that file's data, and right for other data (the original DMBN data's
         // joints lie radians away from the simulator's: the file's statistics would feed the
         // network values hundreds of σ off).
-        let normalization = Normalization::fit(split.train.iter().flat_map(|s| s.joints.iter()));
-        let log = MetricsLog::open(&out.join("metrics.jsonl"), Some(0))?;
+        let normalization = Normalization::fit(train.joints());
         let optim = optimizer(&config);
         let state = CheckpointState {
             step: 0,
@@ -125,9 +135,7 @@ impl Trainer {
             best_quality: None,
             data: Some(std::path::absolute(data).unwrap_or_else(|_| data.to_path_buf())),
         };
-        Ok(Self::assemble(
-            state, out, model, optim, split, log, devices,
-        ))
+        Self::assemble(state, out, model, optim, split, train, devices)
     }
 
     /// Continue the run in `out` from its last checkpoint, with the same settings, on `data`
@@ -169,11 +177,7 @@ impl Trainer {
                 )
             })?,
         };
-        let split = Split::load(
-            &data,
-            state.config.model.image_size,
-            state.config.val_fraction,
-        )?;
+        let split = Split::open(&data, state.config.val_fraction)?;
         state.data = Some(data);
         let (model, _, _) = model::load_bytes(&model_bytes, &device)?;
         let optim = optimizer(&state.config)
@@ -182,22 +186,28 @@ impl Trainer {
                 path: Checkpoint::dir(out),
                 message: format!("optimizer.bpk: {e:?}"),
             })?;
-        let log = MetricsLog::open(&out.join("metrics.jsonl"), Some(state.step))?;
-        Ok(Self::assemble(
-            state, out, model, optim, split, log, devices,
-        ))
+        let train = SequenceStore::open(
+            split.train.clone(),
+            state.config.model.image_size as u32,
+            state.config.frame_cache_mib << 20,
+        )?;
+        Self::assemble(state, out, model, optim, split, train, devices)
     }
 
-    /// A trainer from where a run stands (a fresh run's state at step 0, or a checkpoint's).
+    /// A trainer from where a run stands (a fresh run's state at step 0, or a checkpoint's):
+    /// the training batches stream from disk on a worker thread; the validation batches and
+    /// the quality benchmark's sequences (a fixed number, whatever the dataset's size) are
+    /// read once.
     fn assemble(
         state: CheckpointState,
         out: &Path,
         model: Model,
         optim: ModuleOptimizer,
         split: Split,
-        log: MetricsLog,
+        mut train: SequenceStore,
         devices: Vec<Device>,
-    ) -> Trainer {
+    ) -> Result<Trainer, TrainError> {
+        let log = MetricsLog::open(&out.join("metrics.jsonl"), Some(state.step))?;
         let CheckpointState {
             step,
             rng,
@@ -223,33 +233,42 @@ impl Trainer {
             joint_targets: config.joint_targets,
             ..plain
         });
-        let pool = if split.val.is_empty() {
-            &split.train
-        } else {
-            &split.val
-        };
+        // Held-out frames are read once, uncached: the validation batches are kept.
+        let mut val = SequenceStore::open(split.val, config.model.image_size as u32, 0)?;
+        let pool = if val.is_empty() { &mut train } else { &mut val };
         let mut val_rng = Pcg64::seed_from_u64(config.seed ^ VAL_STREAM);
+        let lengths = pool.lengths();
         let val_set = (0..config.val_batches)
-            .map(|_| Sampler::new(plain).sample(pool, &normalization, &mut val_rng))
-            .collect();
-        Trainer {
+            .map(|_| {
+                let selection = Sampler::new(plain).draw(&lengths, &mut val_rng);
+                Ok(pool.batch(&selection, &normalization)?.0)
+            })
+            .collect::<Result<_, TrainError>>()?;
+        // Up to `quality_sequences` held-out sequences, evenly spread over them.
+        let n = config.quality_sequences.min(val.len());
+        let quality_set = (0..n)
+            .map(|i| val.read(i * val.len() / n))
+            .collect::<Result<_, _>>()?;
+        let batches = BatchStream::spawn(train, sampler, normalization, rng.clone())?;
+        Ok(Trainer {
             config,
             out: out.to_path_buf(),
             model,
             optim,
             rng,
             step,
-            split,
+            batches,
+            val_ids: split.val_ids,
             normalization,
-            sampler,
             val_set,
+            quality_set,
             log,
             best_val,
             best_quality,
             data,
             device: devices[0].clone(),
             devices,
-        }
+        })
     }
 
     /// Steps completed.
@@ -275,24 +294,23 @@ impl Trainer {
 
     /// Held-out sequence ids.
     pub fn val_ids(&self) -> &[u32] {
-        &self.split.val_ids
+        &self.val_ids
     }
 
     /// True when no id is held out (`val_fraction` 0 or a one-id dataset): the validation loss
     /// is measured on training sequences and says nothing about unseen ones.
     pub fn validates_on_training_data(&self) -> bool {
-        self.split.validates_on_training_data()
+        self.val_ids.is_empty()
     }
 
     /// One optimiser step on a fresh batch; a non-finite loss stops before touching the weights.
     pub fn step(&mut self) -> Result<(LossValues, f64), TrainError> {
-        let (batch, joint_targets) =
-            self.sampler
-                .sample_with_joints(&self.split.train, &self.normalization, &mut self.rng);
+        let drawn = self.batches.next()?;
+        self.rng = drawn.rng;
         let (values, grads) = gradients(
             &self.model,
-            &batch,
-            &joint_targets,
+            &drawn.batch,
+            &drawn.joint_targets,
             &self.config,
             &self.devices,
         )?;
@@ -403,13 +421,10 @@ impl Trainer {
     /// spread over them); a better [`ValQuality::score`] than any before is written to
     /// `out/best.dmbn`. `None` when it is off or there is nothing to score.
     pub fn validate_quality(&mut self) -> Result<Option<ValQuality>, TrainError> {
-        let (n, val) = (self.config.quality_sequences, &self.split.val);
-        if n == 0 || val.is_empty() {
+        if self.quality_set.is_empty() {
             return Ok(None);
         }
-        let picked: Vec<&Sequence> = (0..n.min(val.len()))
-            .map(|i| &val[i * val.len() / n.min(val.len())])
-            .collect();
+        let picked: Vec<&Sequence> = self.quality_set.iter().collect();
         let bytes = model::save_bytes(&self.model, &self.normalization, false)?;
         let predictor = Predictor::from_bytes(&bytes)?;
         let Some(quality) = ValQuality::measure(&predictor, &picked)? else {

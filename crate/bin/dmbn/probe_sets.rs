@@ -115,8 +115,8 @@ pub fn probe_sets(
             Ok((set(train, data), set(test, dir)))
         }
         TestSet::Fraction(fraction) => {
-            let split = Split::load(data, size, fraction)
-                .map_err(|e| CliError::Usage(format!("--data: {e}")))?;
+            let split =
+                Split::open(data, fraction).map_err(|e| CliError::Usage(format!("--data: {e}")))?;
             if split.val.is_empty() {
                 return Err(CliError::Usage(format!(
                     "--test-fraction {fraction}: {} has too few ids for a test split (at least \
@@ -124,23 +124,11 @@ pub fn probe_sets(
                     data.display()
                 )));
             }
-            let ids = open(data, "--data")?.ids();
-            let train_ids = ids
-                .into_iter()
-                .filter(|id| !split.val_ids.contains(id))
-                .collect();
-            Ok((
-                ProbeSet {
-                    sequences: split.train,
-                    ids: train_ids,
-                    data: data.to_path_buf(),
-                },
-                ProbeSet {
-                    sequences: split.val,
-                    ids: split.val_ids,
-                    data: data.to_path_buf(),
-                },
-            ))
+            let dataset = open(data, "--data")?;
+            let held = |id: u32| split.val_ids.contains(&id);
+            let train = read_all(&dataset, size, "--data", |id| !held(id))?;
+            let test = read_all(&dataset, size, "--data", held)?;
+            Ok((set(train, data), set(test, data)))
         }
     }
 }

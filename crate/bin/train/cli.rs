@@ -193,6 +193,13 @@ struct Args {
     #[arg(long, value_parser = parse_fraction_range, requires = "augment")]
     freeze_fraction: Option<[f64; 2]>,
 
+    /// MiB of decoded frames kept in memory: training reads frames from disk as its batches
+    /// need them (on a thread of its own, a batch ahead), so memory does not grow with the
+    /// dataset; more only saves decoding, the batches are the same. A resumed run keeps its
+    /// run's.
+    #[arg(long, default_value_t = defaults().frame_cache_mib, conflicts_with = "resume")]
+    frame_cache_mib: usize,
+
     /// Store the final and best models' weights in f16 (half the size; a resumed run keeps
     /// the run's choice, and --half with --resume turns it on).
     #[arg(long)]
@@ -337,6 +344,7 @@ fn run(args: Args) -> Result<(), TrainError> {
             InitializationArg::Glorot => Initialization::Glorot,
         };
         config.half = args.half;
+        config.frame_cache_mib = args.frame_cache_mib;
         Trainer::new_on(&args.devices, data, &args.out, config)?
     };
     let steps = trainer.config().steps;
