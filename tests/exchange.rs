@@ -14,7 +14,7 @@ use std::process::Command;
 use burn::tensor::Device;
 use dmbn::model::{
     export_safetensors, import_safetensors, load_bytes, read_header, with_joint_sigma_scale,
-    ModelError,
+    JointSigmaScale, ModelError,
 };
 use dmbn::predict::{Observations, Predictor};
 use dmbn::sim::Action;
@@ -71,14 +71,22 @@ fn export_then_import_predicts_exactly_as_the_shipped_model() {
 #[test]
 fn the_joint_sigma_scale_survives_export_and_import() {
     let bytes = std::fs::read(support::asset("models/dmbn-sim.dmbn")).unwrap();
-    let scaled = with_joint_sigma_scale(&bytes, 1.3).unwrap();
+    let scale = JointSigmaScale {
+        between: 1.3,
+        forecast: Some(0.7),
+    };
+    let scaled = with_joint_sigma_scale(&bytes, scale).unwrap();
     let back = import_safetensors(&export_safetensors(&scaled, false).unwrap(), false).unwrap();
-    assert_eq!(read_header(&back).unwrap().joint_sigma_scale, Some(1.3));
+    assert_eq!(read_header(&back).unwrap().joint_sigma_scales(), scale);
     // A file without a scale (the paper-recipe DMBN is shipped uncalibrated) gets none.
     let bytes = std::fs::read(support::asset("models/dmbn-paper-2020.dmbn")).unwrap();
     assert_eq!(read_header(&bytes).unwrap().joint_sigma_scale, None);
     let plain = import_safetensors(&export_safetensors(&bytes, false).unwrap(), false).unwrap();
     assert_eq!(read_header(&plain).unwrap().joint_sigma_scale, None);
+    assert_eq!(
+        read_header(&plain).unwrap().forecast_joint_sigma_scale,
+        None
+    );
 }
 
 #[test]
@@ -326,7 +334,11 @@ fn the_pytorch_twin_predicts_what_dmbn_predict_does() {
     // must apply as the Rust predictor does.
     let calibrated = dir.path().join("dmbn-sim-calibrated.dmbn");
     let bytes = std::fs::read(support::asset("models/dmbn-sim.dmbn")).unwrap();
-    std::fs::write(&calibrated, with_joint_sigma_scale(&bytes, 1.3).unwrap()).unwrap();
+    let scale = JointSigmaScale {
+        between: 1.3,
+        forecast: Some(0.7),
+    };
+    std::fs::write(&calibrated, with_joint_sigma_scale(&bytes, scale).unwrap()).unwrap();
     for model in shipped().into_iter().chain([calibrated]) {
         let name = model.file_stem().unwrap().to_string_lossy().into_owned();
         let st = dir.path().join(format!("{name}.safetensors"));

@@ -11,8 +11,8 @@ use dmbn::augment::Batch;
 use dmbn::data::write_atomic;
 use dmbn::model::{
     file, load_bytes, load_bytes_expecting, read_header, save_bytes, tensors,
-    with_joint_sigma_scale, BatchTensors, Model, ModelConfig, ModelError, ModelKind, Normalization,
-    Prediction, Representation,
+    with_joint_sigma_scale, BatchTensors, JointSigmaScale, Model, ModelConfig, ModelError,
+    ModelKind, Normalization, Prediction, Representation,
 };
 
 /// A small deterministic pseudo-random generator (values in [0, 1)).
@@ -504,7 +504,8 @@ fn frame_joints_start_frames_only_predictions_from_the_joints_read() {
 }
 
 /// A joint σ scale is written into the header, leaves the weights and every other output as
-/// they are, multiplies the predicted joint σ exactly, and must be a finite number above 0.
+/// they are, multiplies the predicted joint σ exactly (its forecast factor outside the span
+/// of the observed times, its other one within it), and must be a finite number above 0.
 #[test]
 fn a_joint_sigma_scale_multiplies_the_joint_sigma() {
     let device = device();
@@ -514,39 +515,76 @@ fn a_joint_sigma_scale_multiplies_the_joint_sigma() {
         std: [0.5; 7],
     };
     let bytes = save_bytes(&model, &norm, false).unwrap();
-    let scaled = with_joint_sigma_scale(&bytes, 1.75).unwrap();
-    assert_eq!(read_header(&bytes).unwrap().joint_sigma_scale, None);
-    assert_eq!(read_header(&scaled).unwrap().joint_sigma_scale, Some(1.75));
+    let scale = |between: f32, forecast: Option<f32>| JointSigmaScale { between, forecast };
+    let scaled = with_joint_sigma_scale(&bytes, scale(1.75, Some(0.5))).unwrap();
+    let header = read_header(&bytes).unwrap();
+    assert_eq!(
+        (header.joint_sigma_scale, header.forecast_joint_sigma_scale),
+        (None, None)
+    );
+    let header = read_header(&scaled).unwrap();
+    assert_eq!(
+        (header.joint_sigma_scale, header.forecast_joint_sigma_scale),
+        (Some(1.75), Some(0.5))
+    );
     let seq = dmbn::sim::episode(dmbn::sim::Action::Grasp, 3, 64).unwrap();
-    let observations = dmbn::predict::Observations::from_sequence(&seq, &[0, 20]).unwrap();
+    let observations = dmbn::predict::Observations::from_sequence(&seq, &[2, 20]).unwrap();
+    // Before the first observation, between them (both ends included), after the last.
+    let targets: Vec<usize> = vec![0, 1, 2, 10, 20, 21, 40];
+    let times: Vec<f32> = targets.iter().map(|&k| seq.times()[k]).collect();
     let predict = |bytes: &[u8]| {
         dmbn::predict::Predictor::from_bytes(bytes)
             .unwrap()
-            .predict(&observations, &seq.times()[..5], 0.5)
+            .predict(&observations, &times, 0.5)
             .unwrap()
     };
     let (plain, wide) = (predict(&bytes), predict(&scaled));
     assert_eq!(plain.joint_mean, wide.joint_mean);
     assert_eq!(plain.image_mean, wide.image_mean);
     assert_eq!(plain.image_sigma, wide.image_sigma);
-    for (a, b) in plain.joint_sigma.iter().zip(&wide.joint_sigma) {
-        assert!((b - 1.75 * a).abs() <= 1e-6 * b.abs(), "{a} {b}");
+    for (i, &k) in targets.iter().enumerate() {
+        let factor = if (2..=20).contains(&k) { 1.75 } else { 0.5 };
+        for j in 0..7 {
+            let (a, b) = (plain.joint_sigma[i * 7 + j], wide.joint_sigma[i * 7 + j]);
+            assert!(
+                (b - factor * a).abs() <= 1e-6 * b.abs(),
+                "step {k}: {a} {b}"
+            );
+        }
     }
-    // Setting it again replaces it.
-    let again = with_joint_sigma_scale(&scaled, 0.5).unwrap();
-    assert_eq!(read_header(&again).unwrap().joint_sigma_scale, Some(0.5));
+    // Setting it again replaces it; without a forecast factor, one factor everywhere.
+    let again = with_joint_sigma_scale(&scaled, scale(0.5, None)).unwrap();
+    let header = read_header(&again).unwrap();
+    assert_eq!(
+        (header.joint_sigma_scale, header.forecast_joint_sigma_scale),
+        (Some(0.5), None)
+    );
+    for (a, b) in plain.joint_sigma.iter().zip(&predict(&again).joint_sigma) {
+        assert!((b - 0.5 * a).abs() <= 1e-6 * b.abs(), "{a} {b}");
+    }
     for bad in [0.0, -1.0, f32::NAN, f32::INFINITY] {
-        let err = with_joint_sigma_scale(&bytes, bad).err().unwrap();
+        let err = with_joint_sigma_scale(&bytes, scale(bad, None))
+            .err()
+            .unwrap();
         assert!(
             err.to_string().contains("joint_sigma_scale"),
             "{bad}: {err}"
         );
+        let err = with_joint_sigma_scale(&bytes, scale(1.0, Some(bad)))
+            .err()
+            .unwrap();
+        assert!(
+            err.to_string().contains("forecast_joint_sigma_scale"),
+            "{bad}: {err}"
+        );
     }
     // A file whose header says so is refused, naming the field.
-    let (mut header, weights) = parts(&scaled);
-    header["joint_sigma_scale"] = serde_json::json!(-2.0);
-    let err = load_err(&assemble(&header, &weights));
-    assert!(err.to_string().contains("joint_sigma_scale"), "{err}");
+    for field in ["joint_sigma_scale", "forecast_joint_sigma_scale"] {
+        let (mut header, weights) = parts(&scaled);
+        header[field] = serde_json::json!(-2.0);
+        let err = load_err(&assemble(&header, &weights));
+        assert!(err.to_string().contains(field), "{err}");
+    }
 }
 
 /// Rebuilds a file from a header and a weight section (the checksum and length follow the

@@ -298,8 +298,9 @@ fn dmbn_score_prints_tables_and_writes_json() {
     }
 }
 
-/// `dmbn calibrate` writes the model with a joint σ scale under which ±2σ holds 95% of the
-/// joints of the sequences it was fitted on (both scenarios pooled), and names what is wrong.
+/// `dmbn calibrate` writes the model with joint σ scales under which ±2σ holds 95% of the
+/// joints of the sequences it was fitted on, between the observations and beyond them (both
+/// scenarios pooled), and names what is wrong.
 #[test]
 fn dmbn_calibrate_scales_the_joint_sigma_to_cover_95_percent() {
     let tmp = tempfile::tempdir().unwrap();
@@ -335,28 +336,38 @@ fn dmbn_calibrate_scales_the_joint_sigma_to_cover_95_percent() {
         "{}",
         String::from_utf8_lossy(&ok.stderr)
     );
-    assert!(String::from_utf8_lossy(&ok.stdout).contains("now 95.5%"));
+    let stdout = String::from_utf8_lossy(&ok.stdout);
+    assert_eq!(stdout.matches("now 95.5%").count(), 2, "{stdout}");
     let bytes = std::fs::read(&out).unwrap();
-    let scale = dmbn::model::read_header(&bytes)
-        .unwrap()
-        .joint_sigma_scale
-        .unwrap();
-    assert!(scale > 0.0 && scale != 1.0, "{scale}");
+    let header = dmbn::model::read_header(&bytes).unwrap();
+    // The file's own scale (attn-sim is calibrated) times the fitted factors.
+    let (before, after) = (
+        dmbn::model::read_header(&std::fs::read(&model).unwrap())
+            .unwrap()
+            .joint_sigma_scales(),
+        header.joint_sigma_scales(),
+    );
+    let forecast = after.forecast.expect("the extrap scenario forecasts");
+    assert!(after.between != before.between, "{before:?} {after:?}");
+    assert!(forecast != after.between, "{after:?}");
     let calibrated = Predictor::from_bytes(&bytes).unwrap();
     let dataset = dmbn::data::Dataset::open(&data).unwrap();
-    let mut z = Vec::new();
+    let mut z = dmbn::quality::JointZScores::default();
     for r in dataset.sequences() {
         let seq = dataset.read(r, Some(64)).unwrap();
         for scenario in Scenario::ALL {
             z.extend(dmbn::quality::joint_z_scores(&calibrated, &seq, scenario, 5, 0.5).unwrap());
         }
     }
-    let covered = z.iter().filter(|&&v| v <= 2.0).count() as f64 / z.len() as f64;
-    assert!(
-        (covered - 0.9545).abs() < 0.005,
-        "{covered} of {} values",
-        z.len()
-    );
+    // Each side of the observations' span is now covered 95.45%, up to the quantile's step.
+    for (side, z) in [("between", &z.between), ("forecast", &z.forecast)] {
+        let covered = z.iter().filter(|&&v| v <= 2.0).count() as f64 / z.len() as f64;
+        assert!(
+            (covered - 0.9545).abs() < 0.005,
+            "{side}: {covered} of {} values",
+            z.len()
+        );
+    }
     // Ids with no sequence, and a file that is not there, are named.
     let none = run(args("7-9", &model));
     assert!(String::from_utf8_lossy(&none.stderr).contains("no sequence with an id in 7-9"));

@@ -223,8 +223,20 @@ fn a_plain_reference_reproduces_the_golden_prediction() {
         values.iter().map(|v| v.as_f64().unwrap() as f32).collect()
     };
     let (mean, std) = (stat("mean"), stat("std"));
-    // A calibrated file's factor on every joint σ (`dmbn calibrate`), 1 without one.
-    let joint_sigma_scale = header["joint_sigma_scale"].as_f64().unwrap_or(1.0) as f32;
+    // A calibrated file's factors on the joint σ (`dmbn calibrate`), 1 without them: one
+    // within the span of the observed steps, the forecast one (absent: the same) outside it.
+    let between = header["joint_sigma_scale"].as_f64().unwrap_or(1.0) as f32;
+    let forecast = header["forecast_joint_sigma_scale"]
+        .as_f64()
+        .map_or(between, |f| f as f32);
+    let (first, last) = (golden::OBSERVE[0], *golden::OBSERVE.last().unwrap());
+    let joint_sigma_scale = |k: usize| {
+        if (first..=last).contains(&k) {
+            between
+        } else {
+            forecast
+        }
+    };
 
     // The observations, encoded: [t plane, RGB in [0, 1]] and [t, normalised joints], each
     // modality averaged over the observations, then blended.
@@ -277,7 +289,7 @@ fn a_plain_reference_reproduces_the_golden_prediction() {
         let [image_mean, image_sigma, joint_mean, joint_sigma] = decode(&weights, &input, floor);
         for j in 0..7 {
             let m = joint_mean[j] * std[j] + mean[j];
-            let s = joint_sigma[j] * std[j] * joint_sigma_scale;
+            let s = joint_sigma[j] * std[j] * joint_sigma_scale(k);
             note(format!("joint mean {k}/{j}"), m, sample[k * 7 + j]);
             note(format!("joint σ {k}/{j}"), s, sample[steps * 7 + k * 7 + j]);
         }

@@ -18,7 +18,7 @@ use burn::tensor::{Bytes, Device};
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
-use super::{Model, ModelConfig, ModelError, ModelKind, Normalization};
+use super::{JointSigmaScale, Model, ModelConfig, ModelError, ModelKind, Normalization};
 
 /// The first 8 bytes of every model file.
 pub const MAGIC: &[u8; 8] = b"DMBNMODL";
@@ -61,11 +61,27 @@ pub struct ModelHeader {
     pub normalization: Normalization,
     /// A factor on every predicted joint σ, fitted after training on sequences the model did
     /// not train on (`dmbn calibrate`) so that mean ± 2σ holds about 95% of the truth; absent:
-    /// 1 (the σ as trained).
+    /// 1 (the σ as trained). With [`ModelHeader::forecast_joint_sigma_scale`], only between
+    /// the observations.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub joint_sigma_scale: Option<f32>,
+    /// The factor at target times outside the span of the observed times (forecasting),
+    /// fitted apart because a model's error grows differently there; absent: the
+    /// [`ModelHeader::joint_sigma_scale`].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub forecast_joint_sigma_scale: Option<f32>,
     /// The weight section.
     pub weights: WeightsInfo,
+}
+
+impl ModelHeader {
+    /// The file's joint σ scales ([`JointSigmaScale::NONE`] when it was never calibrated).
+    pub fn joint_sigma_scales(&self) -> JointSigmaScale {
+        JointSigmaScale {
+            between: self.joint_sigma_scale.unwrap_or(1.0),
+            forecast: self.forecast_joint_sigma_scale,
+        }
+    }
 }
 
 /// The model file's bytes: the model's config and weights (in f16 when `half`) with the joint
@@ -91,6 +107,7 @@ pub fn save_bytes(
         config: model.config().clone(),
         normalization: *normalization,
         joint_sigma_scale: None,
+        forecast_joint_sigma_scale: None,
         weights: WeightsInfo {
             format: "burnpack".into(),
             dtype: if half {
@@ -106,20 +123,23 @@ pub fn save_bytes(
     assemble(&header, &weights)
 }
 
-/// The model file `bytes` with its joint σ scale set to `scale` (see
-/// [`ModelHeader::joint_sigma_scale`]); the weights are kept as they are.
-pub fn with_joint_sigma_scale(bytes: &[u8], scale: f32) -> Result<Vec<u8>, ModelError> {
-    check_joint_sigma_scale(Some(scale))?;
+/// The model file `bytes` with its joint σ scales set to `scale` (see
+/// [`ModelHeader::joint_sigma_scale`] and [`ModelHeader::forecast_joint_sigma_scale`]); the
+/// weights are kept as they are.
+pub fn with_joint_sigma_scale(bytes: &[u8], scale: JointSigmaScale) -> Result<Vec<u8>, ModelError> {
+    check_joint_sigma_scale("joint_sigma_scale", Some(scale.between))?;
+    check_joint_sigma_scale("forecast_joint_sigma_scale", scale.forecast)?;
     let (mut header, weights) = split(bytes)?;
-    header.joint_sigma_scale = Some(scale);
+    header.joint_sigma_scale = Some(scale.between);
+    header.forecast_joint_sigma_scale = scale.forecast;
     assemble(&header, weights)
 }
 
 /// A joint σ scale, if any, is a finite number above 0.
-fn check_joint_sigma_scale(scale: Option<f32>) -> Result<(), ModelError> {
+fn check_joint_sigma_scale(field: &str, scale: Option<f32>) -> Result<(), ModelError> {
     match scale {
         Some(s) if !(s.is_finite() && s > 0.0) => Err(ModelError::Header(format!(
-            "joint_sigma_scale is {s}: expected a finite number above 0"
+            "{field} is {s}: expected a finite number above 0"
         ))),
         _ => Ok(()),
     }
@@ -240,7 +260,11 @@ fn split(bytes: &[u8]) -> Result<(ModelHeader, &[u8]), ModelError> {
         serde_json::from_slice(header).map_err(|e| ModelError::Header(e.to_string()))?;
     header.config.validate()?;
     check_normalization(&header.normalization)?;
-    check_joint_sigma_scale(header.joint_sigma_scale)?;
+    check_joint_sigma_scale("joint_sigma_scale", header.joint_sigma_scale)?;
+    check_joint_sigma_scale(
+        "forecast_joint_sigma_scale",
+        header.forecast_joint_sigma_scale,
+    )?;
     if header.weights.format != "burnpack" {
         return Err(ModelError::Header(format!(
             "weights.format is {:?}: expected \"burnpack\"",

@@ -17,7 +17,9 @@ use burn::tensor::{DType, Device};
 use safetensors::{Dtype, SafeTensors};
 use serde::{Deserialize, Serialize};
 
-use super::{load_with_header, save_bytes, Model, ModelConfig, ModelError, Normalization};
+use super::{
+    load_with_header, save_bytes, JointSigmaScale, Model, ModelConfig, ModelError, Normalization,
+};
 
 /// The metadata key holding [`SafetensorsHeader`] as JSON.
 pub const METADATA_KEY: &str = "dmbn";
@@ -31,9 +33,13 @@ pub struct SafetensorsHeader {
     pub config: ModelConfig,
     /// Joint statistics the model was trained with.
     pub normalization: Normalization,
-    /// The model file's factor on every joint σ, if it was calibrated.
+    /// The model file's factor on every joint σ, if it was calibrated (between the
+    /// observations only when the forecast one is given).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub joint_sigma_scale: Option<f32>,
+    /// The model file's factor on the joint σ outside the observed times' span, if any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub forecast_joint_sigma_scale: Option<f32>,
 }
 
 /// The model file in `model_file` as safetensors bytes, f32 (or f16 when `half`).
@@ -44,6 +50,7 @@ pub fn export_safetensors(model_file: &[u8], half: bool) -> Result<Vec<u8>, Mode
         config: file.config,
         normalization: file.normalization,
         joint_sigma_scale: file.joint_sigma_scale,
+        forecast_joint_sigma_scale: file.forecast_joint_sigma_scale,
     };
     let header = serde_json::to_string(&header)
         .map_err(|e| ModelError::Header(format!("cannot write the metadata: {e}")))?;
@@ -100,9 +107,15 @@ pub fn import_safetensors(bytes: &[u8], half: bool) -> Result<Vec<u8>, ModelErro
         )));
     }
     let bytes = save_bytes(&model, &header.normalization, half)?;
-    match header.joint_sigma_scale {
-        Some(scale) => super::with_joint_sigma_scale(&bytes, scale),
-        None => Ok(bytes),
+    match (header.joint_sigma_scale, header.forecast_joint_sigma_scale) {
+        (None, None) => Ok(bytes),
+        (between, forecast) => super::with_joint_sigma_scale(
+            &bytes,
+            JointSigmaScale {
+                between: between.unwrap_or(1.0),
+                forecast,
+            },
+        ),
     }
 }
 

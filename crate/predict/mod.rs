@@ -7,6 +7,7 @@
 //! a prediction with its inputs for comparison with other implementations.
 #[cfg(not(target_arch = "wasm32"))]
 mod arrays;
+mod encoding;
 mod heat_map;
 mod observations;
 mod predictor;
@@ -15,6 +16,7 @@ mod sequence_prediction;
 
 #[cfg(not(target_arch = "wasm32"))]
 pub use arrays::prediction_arrays;
+pub use encoding::Encoding;
 pub use heat_map::{heat_map, heat_map_rgb, pixel_sigma};
 pub use observations::Observations;
 pub use predictor::Predictor;

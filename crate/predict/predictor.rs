@@ -1,10 +1,10 @@
 use burn::tensor::{Device, Tensor, TensorData};
 
-use super::{Observations, SequencePrediction};
+use super::{Encoding, Observations, SequencePrediction};
 use crate::augment::Batch;
 use crate::data::JOINTS;
 use crate::model::{
-    self, tensors, EncodedContexts, Model, ModelError, ModelKind, Normalization, Representation,
+    self, tensors, EncodedContexts, JointSigmaScale, Model, ModelError, ModelKind, Normalization,
 };
 
 /// A trained model ready for inference on the CPU (flex backend): encode observations once,
@@ -13,8 +13,8 @@ use crate::model::{
 pub struct Predictor {
     model: Model,
     normalization: Normalization,
-    /// The file's factor on every joint σ (1 without one; `dmbn calibrate`).
-    joint_sigma_scale: f32,
+    /// The file's factors on the joint σ (1 without them; `dmbn calibrate`).
+    joint_sigma_scale: JointSigmaScale,
     device: Device,
 }
 
@@ -30,7 +30,7 @@ impl Predictor {
         Predictor {
             model,
             normalization,
-            joint_sigma_scale: 1.0,
+            joint_sigma_scale: JointSigmaScale::NONE,
             device: Device::flex(),
         }
     }
@@ -48,21 +48,21 @@ impl Predictor {
         image_size: Option<usize>,
     ) -> Result<Self, ModelError> {
         let (model, header) = model::load_with_header(bytes, &Device::flex(), kind, image_size)?;
-        let scale = header.joint_sigma_scale.unwrap_or(1.0);
+        let scale = header.joint_sigma_scales();
         // One constructor: the loaded weights are frozen as `new`'s are (not compared again
         // on every call).
         Ok(Self::new(model, header.normalization).with_joint_sigma_scale(scale))
     }
 
-    /// The predictor with every joint σ multiplied by `scale` (a calibration fitted after
-    /// training; see [`crate::model::ModelHeader::joint_sigma_scale`]).
-    pub fn with_joint_sigma_scale(mut self, scale: f32) -> Self {
+    /// The predictor with its joint σ multiplied by `scale` (a calibration fitted after
+    /// training; see [`JointSigmaScale`]).
+    pub fn with_joint_sigma_scale(mut self, scale: JointSigmaScale) -> Self {
         self.joint_sigma_scale = scale;
         self
     }
 
-    /// The factor on every joint σ: 1 unless the file was calibrated.
-    pub fn joint_sigma_scale(&self) -> f32 {
+    /// The factors on the joint σ: [`JointSigmaScale::NONE`] unless the file was calibrated.
+    pub fn joint_sigma_scale(&self) -> JointSigmaScale {
         self.joint_sigma_scale
     }
 
@@ -84,15 +84,11 @@ impl Predictor {
         &self.normalization
     }
 
-    /// What the decoders condition on (see [`Representation`]) for `observations` with
+    /// What the decoders condition on (see [`Encoding`]) for `observations` with
     /// blending coefficient `blend`
     /// (1 = images only, 0 = joints only): [`Predictor::encode_contexts`], then
     /// [`Predictor::represent`].
-    pub fn encode(
-        &self,
-        observations: &Observations,
-        blend: f32,
-    ) -> Result<Representation, ModelError> {
+    pub fn encode(&self, observations: &Observations, blend: f32) -> Result<Encoding, ModelError> {
         check_blend(blend)?;
         self.represent(&self.encode_contexts(observations)?, blend)
     }
@@ -116,32 +112,53 @@ impl Predictor {
         &self,
         contexts: &EncodedContexts,
         blend: f32,
-    ) -> Result<Representation, ModelError> {
+    ) -> Result<Encoding, ModelError> {
         check_blend(blend)?;
         let c = Tensor::<1>::from_data(
             TensorData::new(vec![blend; contexts.batch()], [contexts.batch()]),
             &self.device,
         );
-        self.model.represent(contexts, c)
+        let (times, mask) = (
+            model::values(contexts.times().clone()),
+            model::values(contexts.mask().clone()),
+        );
+        let span = times
+            .iter()
+            .zip(&mask)
+            .filter(|(_, &m)| m > 0.0)
+            .fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), (&t, _)| {
+                (lo.min(t), hi.max(t))
+            });
+        Ok(Encoding {
+            representation: self.model.represent(contexts, c)?,
+            span,
+        })
     }
 
     /// The prediction at `target_times` (finite phases; any number, decoded in chunks of
     /// [`Predictor::CHUNK`]).
     pub fn decode(
         &self,
-        representation: &Representation,
+        encoding: &Encoding,
         target_times: &[f32],
     ) -> Result<SequencePrediction, ModelError> {
         check_times(target_times)?;
         let mut out = SequencePrediction::empty(self.model.image_size());
         for chunk in target_times.chunks(Self::CHUNK) {
-            let p = self.model.decode(representation, self.times(chunk))?;
+            let p = self
+                .model
+                .decode(&encoding.representation, self.times(chunk))?;
+            let mut joint_sigma = model::values(p.joint_sigma);
+            for (row, &t) in joint_sigma.chunks_exact_mut(JOINTS).zip(chunk) {
+                let scale = self.joint_sigma_scale.at(t, encoding.span);
+                row.iter_mut().for_each(|s| *s *= scale);
+            }
             out.push(
                 chunk,
                 &model::values(p.image_mean),
                 &model::values(p.image_sigma),
                 &model::values(p.joint_mean),
-                &model::values(p.joint_sigma.mul_scalar(self.joint_sigma_scale)),
+                &joint_sigma,
                 &self.normalization,
             );
         }
@@ -155,8 +172,8 @@ impl Predictor {
         target_times: &[f32],
         blend: f32,
     ) -> Result<SequencePrediction, ModelError> {
-        let representation = self.encode(observations, blend)?;
-        self.decode(&representation, target_times)
+        let encoding = self.encode(observations, blend)?;
+        self.decode(&encoding, target_times)
     }
 
     /// Only the joint means at `target_times` (radians and the gripper value, one row per
@@ -169,12 +186,12 @@ impl Predictor {
         blend: f32,
     ) -> Result<Vec<[f32; JOINTS]>, ModelError> {
         check_times(target_times)?;
-        let representation = self.encode(observations, blend)?;
+        let encoding = self.encode(observations, blend)?;
         let mut rows = Vec::with_capacity(target_times.len());
         for chunk in target_times.chunks(Self::CHUNK) {
             let (mean, _) = self
                 .model
-                .decode_joints(&representation, self.times(chunk))?;
+                .decode_joints(&encoding.representation, self.times(chunk))?;
             for row in model::values(mean).chunks_exact(JOINTS) {
                 let row: [f32; JOINTS] = std::array::from_fn(|j| row[j]);
                 rows.push(self.normalization.denormalize(&row));

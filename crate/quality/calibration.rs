@@ -102,27 +102,54 @@ pub struct Calibration {
 /// A calibrated Gaussian's ±2σ coverage.
 pub const TWO_SIGMA: f64 = 0.954_5;
 
-/// The joints' errors in units of their predicted σ, |truth − mean| / σ, at the scored steps of
-/// `scenario` that `predictor` did not observe on `seq`: what a joint σ scale is fitted on.
-/// Empty when the sequence is too short for the scenario.
+/// The joints' errors in units of their predicted σ, |truth − mean| / σ, at the scored steps
+/// of a scenario that the predictor did not observe: apart for the steps within the span of
+/// the observed times and those outside it, what the two factors of a
+/// [`crate::model::JointSigmaScale`] are fitted on.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct JointZScores {
+    pub between: Vec<f64>,
+    pub forecast: Vec<f64>,
+}
+
+impl JointZScores {
+    /// Adds another sequence's scores.
+    pub fn extend(&mut self, other: JointZScores) {
+        self.between.extend(other.between);
+        self.forecast.extend(other.forecast);
+    }
+}
+
+/// [`JointZScores`] of `predictor` on `seq` in `scenario`; empty when the sequence is too short
+/// for the scenario.
 pub fn joint_z_scores(
     predictor: &Predictor,
     seq: &Sequence,
     scenario: Scenario,
     observations: usize,
     blend: f32,
-) -> Result<Vec<f64>, ModelError> {
+) -> Result<JointZScores, ModelError> {
+    let mut z = JointZScores::default();
     let Some(steps) = scenario.steps(seq.len(), observations) else {
-        return Ok(Vec::new());
+        return Ok(z);
     };
     let observed = Observations::from_sequence(seq, &steps.observed)?;
-    let prediction = predictor.predict(&observed, &seq.times(), blend)?;
-    let mut z = Vec::new();
+    let times = seq.times();
+    let prediction = predictor.predict(&observed, &times, blend)?;
+    let (first, last) = (
+        steps.observed.iter().min().copied().unwrap_or(0),
+        steps.observed.iter().max().copied().unwrap_or(0),
+    );
     for &k in steps.scored.iter().filter(|k| !steps.observed.contains(k)) {
+        let side = if (first..=last).contains(&k) {
+            &mut z.between
+        } else {
+            &mut z.forecast
+        };
         for j in 0..JOINTS {
             let i = k * JOINTS + j;
             let error = (seq.joints[k][j] - prediction.joint_mean[i]).abs() as f64;
-            z.push(error / prediction.joint_sigma[i] as f64);
+            side.push(error / prediction.joint_sigma[i] as f64);
         }
     }
     Ok(z)

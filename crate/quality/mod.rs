@@ -13,8 +13,8 @@ mod scenario;
 
 pub use accumulator::{Accumulator, Quality};
 pub use calibration::{
-    joint_z_scores, two_sigma_scale, Calibration, Coverage, CoverageSummary, LEVELS, MOVING,
-    TWO_SIGMA,
+    joint_z_scores, two_sigma_scale, Calibration, Coverage, CoverageSummary, JointZScores, LEVELS,
+    MOVING, TWO_SIGMA,
 };
 pub use forecast::score_steps;
 pub use mean_motion::MeanMotion;

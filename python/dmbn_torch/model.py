@@ -485,8 +485,6 @@ class Predictor(nn.Module):
             raise ValueError(f"frames: expected [N, {s}, {s}, 3] uint8, found {list(frames.shape)}")
         mean = torch.tensor(self.normalization["mean"], device=device)
         std = torch.tensor(self.normalization["std"], device=device)
-        # A calibrated file's factor on every joint σ (`dmbn calibrate`; absent: 1).
-        sigma_scale = float(self.header.get("joint_sigma_scale") or 1.0)
         joints = (torch.as_tensor(joints, dtype=torch.float32, device=device) - mean) / std
         n = joints.shape[0]
         contexts = Contexts(
@@ -504,8 +502,17 @@ class Predictor(nn.Module):
             "image_mean": out["image_mean"].permute(0, 2, 3, 1),
             "image_sigma": out["image_sigma"].permute(0, 2, 3, 1),
             "joint_mean": out["joint_mean"] * std + mean,
-            "joint_sigma": out["joint_sigma"] * std * sigma_scale,
+            "joint_sigma": out["joint_sigma"] * std * self.joint_sigma_scale(contexts.times, target_times),
         }
+
+    def joint_sigma_scale(self, observed_times, target_times):
+        """A calibrated file's factors on the joint σ (`dmbn calibrate`; absent: 1), one per
+        target as a column: `joint_sigma_scale` within the span of the observed times,
+        `forecast_joint_sigma_scale` (absent: the other) outside it."""
+        between = float(self.header.get("joint_sigma_scale") or 1.0)
+        forecast = float(self.header.get("forecast_joint_sigma_scale") or between)
+        inside = (target_times >= observed_times.min()) & (target_times <= observed_times.max())
+        return torch.where(inside, between, forecast).unsqueeze(1)
 
 
 def load(path, device="cpu"):

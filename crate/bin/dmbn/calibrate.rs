@@ -1,13 +1,13 @@
 //! `dmbn calibrate`: a model file's joint σ scaled so that mean ± 2σ holds about 95% of the
-//! truth on sequences it did not train on.
+//! truth on sequences it did not train on, between the observations and beyond them.
 use std::path::PathBuf;
 
 use clap::Args;
 
 use dmbn::data::Dataset;
-use dmbn::model::with_joint_sigma_scale;
+use dmbn::model::{with_joint_sigma_scale, JointSigmaScale};
 use dmbn::predict::Predictor;
-use dmbn::quality::{joint_z_scores, two_sigma_scale, Scenario, TWO_SIGMA};
+use dmbn::quality::{joint_z_scores, two_sigma_scale, JointZScores, Scenario, TWO_SIGMA};
 
 use crate::args::{parse_blend, parse_ids, sequences_in};
 use crate::error::CliError;
@@ -37,7 +37,8 @@ pub struct CalibrateArgs {
 }
 
 /// Pools the joints' standardised errors of both scenarios of the quality benchmark and
-/// scales σ so that ±2σ covers 95.45% of them.
+/// scales σ so that ±2σ covers 95.45% of them: apart between the observations and outside
+/// their span (forecasting), where a model errs differently.
 pub fn run(args: CalibrateArgs) -> Result<(), CliError> {
     let predictor = Predictor::load(&args.model)?;
     let bytes = std::fs::read(&args.model).map_err(|source| CliError::Io {
@@ -49,7 +50,7 @@ pub fn run(args: CalibrateArgs) -> Result<(), CliError> {
     let refs = sequences_in(&dataset, &args.data, Some(args.ids))?;
     let size = predictor.model().image_size() as u32;
     let bar = progress(refs.len(), "calibrating");
-    let mut z = Vec::new();
+    let mut z = JointZScores::default();
     for r in refs {
         let seq = dataset.read(r, Some(size))?;
         for scenario in Scenario::ALL {
@@ -65,20 +66,35 @@ pub fn run(args: CalibrateArgs) -> Result<(), CliError> {
         bar.inc(1);
     }
     bar.finish_and_clear();
-    let before = z.iter().filter(|&&v| v <= 2.0).count() as f64 / z.len().max(1) as f64;
-    let factor = two_sigma_scale(z)
-        .filter(|f| f.is_finite() && *f > 0.0)
-        .ok_or_else(|| {
-            CliError::Usage(format!(
-                "ids {a}-{b}: no scored joint value to fit on (sequences too short?)"
-            ))
-        })?;
-    let scale = predictor.joint_sigma_scale() * factor as f32;
+    let held = |z: &[f64]| z.iter().filter(|&&v| v <= 2.0).count() as f64 / z.len() as f64;
+    let factor = |z: &[f64]| two_sigma_scale(z.to_vec()).filter(|f| f.is_finite() && *f > 0.0);
+    let between = factor(&z.between).ok_or_else(|| {
+        CliError::Usage(format!(
+            "ids {a}-{b}: no scored joint value to fit on (sequences too short?)"
+        ))
+    })?;
+    let forecast = factor(&z.forecast);
+    let scale = predictor.joint_sigma_scale().then(JointSigmaScale {
+        between: between as f32,
+        forecast: forecast.map(|f| f as f32),
+    });
     write(&args.out, &with_joint_sigma_scale(&bytes, scale)?)?;
     println!(
-        "joint σ × {factor:.3} (the file's scale {scale:.3}): ±2σ held {:.1}% of the joints on ids {a}-{b}, now {:.1}%",
-        100.0 * before,
+        "joint σ × {between:.3} between the observations: ±2σ held {:.1}% of the joints on ids {a}-{b}, now {:.1}%",
+        100.0 * held(&z.between),
         100.0 * TWO_SIGMA
+    );
+    if let Some(forecast) = forecast {
+        println!(
+            "joint σ × {forecast:.3} outside them (forecasting): ±2σ held {:.1}%, now {:.1}%",
+            100.0 * held(&z.forecast),
+            100.0 * TWO_SIGMA
+        );
+    }
+    println!(
+        "the file's scales: {:.3} between, {:.3} outside",
+        scale.between,
+        scale.forecast.unwrap_or(scale.between)
     );
     println!("wrote {}", args.out.display());
     Ok(())

@@ -1,0 +1,67 @@
+use serde::{Deserialize, Serialize};
+
+/// A calibration's factors on the predicted joint σ (`dmbn calibrate`), fitted after training
+/// on sequences the model did not train on: one between the observations, one when
+/// forecasting outside their span (before the first observed time or after the last), where
+/// a model's error grows differently (the same factor cannot serve both: a model may be
+/// over-confident between its observations and under-confident beyond them).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct JointSigmaScale {
+    /// At target times within the span of the observed times.
+    pub between: f32,
+    /// At target times outside it; `None`: [`JointSigmaScale::between`].
+    pub forecast: Option<f32>,
+}
+
+impl JointSigmaScale {
+    /// The σ as trained.
+    pub const NONE: JointSigmaScale = JointSigmaScale {
+        between: 1.0,
+        forecast: None,
+    };
+
+    /// The factor at target time `t` for observations whose times span `span` (first, last).
+    pub fn at(&self, t: f32, span: (f32, f32)) -> f32 {
+        if (span.0..=span.1).contains(&t) {
+            self.between
+        } else {
+            self.forecast.unwrap_or(self.between)
+        }
+    }
+
+    /// Both factors multiplied by `other`'s (a calibration refitted on top of an earlier one).
+    pub fn then(&self, other: JointSigmaScale) -> JointSigmaScale {
+        JointSigmaScale {
+            between: self.between * other.between,
+            forecast: Some(
+                self.forecast.unwrap_or(self.between) * other.forecast.unwrap_or(other.between),
+            ),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_forecast_factor_applies_outside_the_observed_span_only() {
+        let scale = JointSigmaScale {
+            between: 1.5,
+            forecast: Some(0.5),
+        };
+        assert_eq!(scale.at(0.2, (0.2, 0.6)), 1.5);
+        assert_eq!(scale.at(0.6, (0.2, 0.6)), 1.5);
+        assert_eq!(scale.at(0.61, (0.2, 0.6)), 0.5);
+        assert_eq!(scale.at(0.1, (0.2, 0.6)), 0.5);
+        let single = JointSigmaScale {
+            between: 2.0,
+            forecast: None,
+        };
+        assert_eq!(single.at(0.9, (0.2, 0.6)), 2.0);
+        assert_eq!(JointSigmaScale::NONE.at(0.9, (0.2, 0.6)), 1.0);
+        let again = single.then(scale);
+        assert_eq!(again.at(0.3, (0.2, 0.6)), 3.0);
+        assert_eq!(again.at(0.9, (0.2, 0.6)), 1.0);
+    }
+}
