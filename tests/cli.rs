@@ -279,3 +279,23 @@ fn interrupted_simulate_leaves_no_dataset() {
     assert!(out.status.success(), "stderr: {}", text(&out.stderr));
     assert!(text(&out.stdout).contains("2 sequences, 1 ids"));
 }
+
+/// A reader that stops early (`dmbn inspect DIR | head -1`) ends the command quietly, as it
+/// does other tools: no panic in println! on the closed pipe.
+#[test]
+fn a_closed_output_pipe_ends_the_command_without_a_panic() {
+    let tmp = tempfile::tempdir().unwrap();
+    fixture_dataset(tmp.path());
+    let mut child = Command::new(env!("CARGO_BIN_EXE_dmbn"))
+        .args(["inspect", tmp.path().to_str().unwrap()])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Close the pipe before the command writes anything.
+    child.stdout = None;
+    let out = child.wait_with_output().unwrap();
+    let stderr = text(&out.stderr);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert!(!stderr.contains("Broken pipe"), "{stderr}");
+}

@@ -121,21 +121,55 @@ fn original_data_weights_use_their_observations_on_held_out_ids() {
     let Some(data) = support::dmbn2020_dataset() else {
         return;
     };
-    let read = |keep: &dyn Fn(u32) -> bool| -> Vec<(String, Sequence)> {
-        data.sequences()
-            .iter()
-            .filter(|s| keep(s.id))
-            .map(|s| (s.action.clone(), data.read(s, Some(64)).unwrap()))
-            .collect()
-    };
-    let (train, held) = (read(&|id| id < 32), read(&|id| id >= 32));
-    let mean = MeanMotion::fit(train.iter().map(|(a, s)| (a.as_str(), s))).unwrap();
-    let held: Vec<(&str, Sequence)> = held.iter().map(|(a, s)| (a.as_str(), s.clone())).collect();
+    let (held, mean) = held_out(&data);
     for name in ["attn-2020", "dmbn-2020", "pte-2020", "pte-aug-2020"] {
         let predictor = shipped(name);
         let fresh = support::untrained(predictor.model().kind(), *predictor.normalization());
         support::assert_uses_its_observations(name, &predictor, &fresh, &held, &mean);
     }
+}
+
+/// The held-out ids 32-39 of the original data with their actions, and the actions' mean
+/// motion over the training ids 0-31.
+fn held_out(data: &Dataset) -> (Vec<(&str, Sequence)>, MeanMotion) {
+    let read = |keep: &dyn Fn(u32) -> bool| -> Vec<(&str, Sequence)> {
+        data.sequences()
+            .iter()
+            .filter(|s| keep(s.id))
+            .map(|s| (s.action.as_str(), data.read(s, Some(64)).unwrap()))
+            .collect()
+    };
+    let (train, held) = (read(&|id| id < 32), read(&|id| id >= 32));
+    let mean = MeanMotion::fit(train.iter().map(|(a, s)| (*a, s))).unwrap();
+    (held, mean)
+}
+
+/// The original-data issue's calibration bar on the held-out ids 32-39: each quality `-2020`
+/// file's ±2σ joint band holds 90-98% of the truth at the unobserved steps of both scenarios.
+/// (Their σ scales were fitted on these same ids, the runs' validation ids; docs/results.md
+/// gives the two-fold cross-fitted coverage, which this cannot check.)
+#[test]
+fn original_data_weights_two_sigma_bands_hold_90_to_98_percent() {
+    let Some(data) = support::dmbn2020_dataset() else {
+        return;
+    };
+    let (held, mean) = held_out(&data);
+    let mut failures = Vec::new();
+    for name in ["attn-2020", "dmbn-2020", "pte-2020", "pte-aug-2020"] {
+        let predictor = shipped(name);
+        for scenario in Scenario::ALL {
+            let (model, _, _) = support::measure(&predictor, &held, scenario, &mean);
+            let joints = model.calibration.and_then(|c| c.joints).unwrap();
+            println!("{name} {scenario}: ±2σ {:.3}", joints.two_sigma);
+            if !(0.90..=0.98).contains(&joints.two_sigma) {
+                failures.push(format!(
+                    "{name} {scenario}: ±2σ holds {:.1}%",
+                    100.0 * joints.two_sigma
+                ));
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
 }
 
 /// Without the original data, on simulated episodes (another arm, camera and object): the

@@ -107,6 +107,13 @@ enum Command {
 
 #[cfg(not(target_arch = "wasm32"))]
 fn main() -> std::process::ExitCode {
+    // A closed output pipe (`| head`) ends the process quietly, as it does other tools,
+    // instead of a panic in println! (Rust ignores SIGPIPE by default).
+    // SAFETY: restoring a signal's default disposition before any thread is started.
+    #[cfg(unix)]
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
     let cli = <Cli as clap::Parser>::parse();
     let result = match cli.command {
         Command::Simulate(args) => simulate::run(args),

@@ -6,6 +6,13 @@ mod cli;
 
 #[cfg(not(target_arch = "wasm32"))]
 fn main() -> std::process::ExitCode {
+    // A closed output pipe (`| head`) ends the process quietly, as it does other tools,
+    // instead of a panic in println! (Rust ignores SIGPIPE by default).
+    // SAFETY: restoring a signal's default disposition before any thread is started.
+    #[cfg(unix)]
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
     cli::main()
 }
 
