@@ -45,6 +45,16 @@ for m in dmbn pte pte-aug attn; do
   fi
 done
 
+# A stage of the simulator's reproduction, which the original data's models start from.
+sim_file() {
+  local path=$root/out/results-sim/runs/$1/model.dmbn
+  if [ ! -f "$path" ]; then
+    echo "error: the $set_name models start from $path: run TRAIN=1 bash docs/reproduce.sh sim first" >&2
+    return 1
+  fi
+  echo "$path"
+}
+
 # One training stage into $out/runs/NAME; --resume continues an interrupted one, a finished
 # one is left as it is.
 stage() {
@@ -88,23 +98,40 @@ if [ "${TRAIN:-0}" = 1 ]; then
       # DMBN-PTE's trained file, then the time warps (run after sim/pte: models are in that order).
       sim/pte-aug) stage pte-aug "${longer[@]}" --init "$out/runs/pte-2/model.dmbn" --augment --steps 2000 --seed 5
         file[$m]=$out/runs/pte-aug/model.dmbn ;;
-      2020/pte) stage pte "${first[@]}" --model pte
-        file[$m]=$out/runs/pte/model.dmbn ;;
-      2020/dmbn) stage dmbn "${first[@]}" --model dmbn --beta-nll 1
+      # The simulator's trained DMBN and DMBN-PTE fine-tuned here (then, for DMBN-PTE, longer
+      # at half the rate; the time warps start from its first stage).
+      2020/dmbn) init=$(sim_file dmbn-4)
+        stage dmbn --init "$init" --steps 3000 --lr 5e-4 --seed 11 --beta-nll 1
         file[$m]=$out/runs/dmbn/model.dmbn ;;
-      2020/pte-aug) stage pte-aug "${first[@]}" --model pte --augment --beta-nll 1
+      2020/pte) init=$(sim_file pte-2)
+        stage pte --init "$init" --steps 3000 --lr 5e-4 --seed 12 --beta-nll 1
+        stage pte-2 --init "$out/runs/pte/model.dmbn" --steps 2500 --lr 2.5e-4 --seed 13 --beta-nll 1
+        file[$m]=$out/runs/pte-2/model.dmbn ;;
+      2020/pte-aug) stage pte-aug --init "$out/runs/pte/model.dmbn" --augment --steps 2000 --lr 2.5e-4 --seed 14 --beta-nll 1
         file[$m]=$out/runs/pte-aug/model.dmbn ;;
       # The simulator's attentive model (stage attn-3 of the sim reproduction) fine-tuned here.
-      2020/attn) sim_attn=$root/out/results-sim/runs/attn-3/model.dmbn
-        if [ ! -f "$sim_attn" ]; then
-          echo "error: attn-2020 starts from $sim_attn: run TRAIN=1 bash docs/reproduce.sh sim first" >&2
-          exit 2
-        fi
-        single_modality=0.5 stage attn --init "$sim_attn" --steps 1500 --lr 5e-4 --seed 1 --beta-nll 1
+      2020/attn) init=$(sim_file attn-3)
+        single_modality=0.5 stage attn --init "$init" --steps 1500 --lr 5e-4 --seed 1 --beta-nll 1
         single_modality=0.5 stage attn-2 --init "$out/runs/attn/best.dmbn" --steps 3000 --lr 3e-4 --seed 2 --beta-nll 1
         single_modality=0.5 stage attn-3 --init "$out/runs/attn-2/best.dmbn" --steps 3000 --lr 2e-4 --seed 3 --beta-nll 1
         file[$m]=$out/runs/attn-3/model.dmbn ;;
     esac
+  done
+  # The joint σ scales (docs/results.md, "Calibration"): fitted on ids the weights did not
+  # train on. The simulator's on 30 more episodes per action (seeds 700000-700029); the
+  # original data's on its validation ids 32-39, the only ids left (its 40 are few).
+  if [ "$set_name" = sim ]; then
+    calib=$out/calib
+    [ -d "$calib" ] || "$bin/dmbn" simulate --out "$calib" --sequences 30 --seed 700000 >/dev/null
+    calib_ids=0-29
+  else
+    calib=$data
+    calib_ids=32-39
+  fi
+  for m in "${models[@]}"; do
+    "$bin/dmbn" calibrate --model "${file[$m]}" --data "$calib" --ids "$calib_ids" \
+      --out "$out/runs/$m-calibrated.dmbn"
+    file[$m]=$out/runs/$m-calibrated.dmbn
   done
 fi
 
