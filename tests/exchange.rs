@@ -388,25 +388,14 @@ fn the_pytorch_twin_predicts_what_dmbn_predict_does() {
                 // independent reference.
                 let bytes = std::fs::read(&twin).unwrap();
                 let file = SafeTensors::deserialize(&bytes).unwrap();
+                let array = |name: &str| support::f32_values(name, &file.tensor(name).unwrap());
                 let prediction = dmbn::predict::SequencePrediction {
                     image_size: 64,
                     times: Vec::new(),
-                    image_mean: support::f32_values(
-                        "image_mean",
-                        &file.tensor("image_mean").unwrap(),
-                    ),
-                    image_sigma: support::f32_values(
-                        "image_sigma",
-                        &file.tensor("image_sigma").unwrap(),
-                    ),
-                    joint_mean: support::f32_values(
-                        "joint_mean",
-                        &file.tensor("joint_mean").unwrap(),
-                    ),
-                    joint_sigma: support::f32_values(
-                        "joint_sigma",
-                        &file.tensor("joint_sigma").unwrap(),
-                    ),
+                    image_mean: array("image_mean"),
+                    image_sigma: array("image_sigma"),
+                    joint_mean: array("joint_mean"),
+                    joint_sigma: array("joint_sigma"),
                 };
                 let (diff, at) =
                     golden::max_diff(&golden::sample(&prediction), &golden::expected());

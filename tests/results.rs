@@ -154,21 +154,10 @@ fn original_data_weights_two_sigma_bands_hold_90_to_98_percent() {
         return;
     };
     let (held, mean) = held_out(&data);
-    let mut failures = Vec::new();
-    for name in ["attn-2020", "dmbn-2020", "pte-2020", "pte-aug-2020"] {
-        let predictor = shipped(name);
-        for scenario in Scenario::ALL {
-            let (model, _, _) = support::measure(&predictor, &held, scenario, &mean);
-            let joints = model.calibration.and_then(|c| c.joints).unwrap();
-            println!("{name} {scenario}: ±2σ {:.3}", joints.two_sigma);
-            if !(0.90..=0.98).contains(&joints.two_sigma) {
-                failures.push(format!(
-                    "{name} {scenario}: ±2σ holds {:.1}%",
-                    100.0 * joints.two_sigma
-                ));
-            }
-        }
-    }
+    let failures: Vec<String> = ["attn-2020", "dmbn-2020", "pte-2020", "pte-aug-2020"]
+        .iter()
+        .flat_map(|name| support::two_sigma_misses(name, &shipped(name), &held, &mean))
+        .collect();
     assert!(failures.is_empty(), "{failures:#?}");
 }
 

@@ -225,3 +225,32 @@ pub fn safetensors_values(bytes: &[u8]) -> std::collections::HashMap<String, Vec
         })
         .collect()
 }
+
+/// The original-data issue's calibration bar for `predictor` (`name` in the messages) on
+/// `seqs`: in each scenario, the fraction of true joint values within mean ± 2σ at the
+/// unobserved steps, printed, and a message for each outside 90-98% (a calibrated Gaussian:
+/// 95.4%).
+pub fn two_sigma_misses(
+    name: &str,
+    predictor: &dmbn::predict::Predictor,
+    seqs: &[(&str, dmbn::data::Sequence)],
+    mean: &dmbn::quality::MeanMotion,
+) -> Vec<String> {
+    let mut misses = Vec::new();
+    for scenario in dmbn::quality::Scenario::ALL {
+        let (model, _, _) = measure(predictor, seqs, scenario, mean);
+        let joints = model
+            .calibration
+            .and_then(|c| c.joints)
+            .expect("unobserved joints were scored");
+        println!("{name} {scenario}: ±2σ {:.3}", joints.two_sigma);
+        if !(0.90..=0.98).contains(&joints.two_sigma) {
+            misses.push(format!(
+                "{name} {scenario}: ±2σ holds {:.1}% of {} joint values",
+                100.0 * joints.two_sigma,
+                joints.values
+            ));
+        }
+    }
+    misses
+}
