@@ -15,7 +15,7 @@ use burn::module::{Module, ModuleMapper, Param};
 use burn::optim::GradientsParams;
 use burn::tensor::{Device, Tensor};
 use dmbn::augment::{Batch, JointTargets, Sampler, SamplerConfig};
-use dmbn::data::{Dataset, DatasetWriter, Normalization};
+use dmbn::data::{Dataset, DatasetWriter, JointScale, Normalization};
 use dmbn::model::{
     export_safetensors, import_file, joint_nll, joint_target_tensors, save_bytes, tensors,
     LossValues, Model, ModelConfig, ModelKind,
@@ -90,6 +90,9 @@ fn the_twin_reads_a_dataset_as_the_rust_reader_does() {
             s = data.read_sequence(folder, id, size)\n    \
             out[f'frames_{size}'] = torch.from_numpy(s.frames.copy())\n\
         out['joints'] = torch.from_numpy(s.joints)\n\
+        for scale in ('per-joint', 'shared'):\n    \
+            n = data.Normalization.fit([s.joints]).scaled(scale)\n    \
+            out[f'std_{scale}'] = torch.from_numpy(n.std.copy())\n\
         save_file(out, sys.argv[2])\n";
     let read = dir.path().join("read.safetensors");
     run(support::twin(&python)
@@ -115,6 +118,19 @@ fn the_twin_reads_a_dataset_as_the_rust_reader_does() {
         }
         let joints: Vec<f32> = seq.joints.iter().flatten().copied().collect();
         assert_eq!(joints, twin["joints"]);
+    }
+    // The joint normalisation, fitted per joint or with the arm's one scale.
+    let seq = dataset.read(&dataset.sequences()[0], None).unwrap();
+    for (scale, name) in [
+        (JointScale::PerJoint, "per-joint"),
+        (JointScale::Shared, "shared"),
+    ] {
+        let ours = Normalization::fit(&seq.joints).scaled(scale).std;
+        let theirs = &twin[&format!("std_{name}")];
+        assert!(
+            max_diff(&ours, theirs) < 1e-6,
+            "{name}: {ours:?} {theirs:?}"
+        );
     }
 }
 

@@ -12,6 +12,7 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::Path;
 use std::sync::Mutex;
 
+use dmbn::data::JointScale;
 use dmbn::model::{read_header, ModelConfig, ModelKind, WeightDType};
 use dmbn::predict::{Observations, Predictor};
 use dmbn::sim::{episode, Action};
@@ -544,6 +545,39 @@ fn init_starts_from_a_model_files_weights_with_the_runs_normalisation() {
         }
         other => panic!("expected an init error, got {:?}", other.err()),
     }
+}
+
+#[test]
+fn a_shared_joint_scale_divides_the_arm_by_one_scale_and_trains_in_those_units() {
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("data");
+    dataset(&data, 2);
+    let run = |scale: JointScale, name: &str| {
+        let mut config = small(ModelKind::Pte, 2);
+        config.joint_scale = scale;
+        let out = tmp.path().join(name);
+        new_trainer(&data, &out, config)
+            .unwrap()
+            .run(|_| {})
+            .unwrap();
+        let bytes = std::fs::read(out.join("model.dmbn")).unwrap();
+        (read_header(&bytes).unwrap().normalization, metrics(&out))
+    };
+    let (per_joint, per_joint_metrics) = run(JointScale::PerJoint, "per-joint");
+    let (shared, shared_metrics) = run(JointScale::Shared, "shared");
+    let arm = &per_joint.std[..6];
+    let rms = (arm.iter().map(|s| s * s).sum::<f32>() / 6.0).sqrt();
+    assert!(arm.iter().any(|s| (s - rms).abs() > 1e-3), "{arm:?}");
+    for j in 0..6 {
+        assert!((shared.std[j] - rms).abs() < 1e-6, "{j}: {shared:?}");
+    }
+    assert_eq!(
+        shared.std[6], per_joint.std[6],
+        "the gripper keeps its scale"
+    );
+    assert_eq!(shared.mean, per_joint.mean);
+    // The joints are fed and judged in other units: other losses from the first step.
+    assert_ne!(shared_metrics[0].joint_mse, per_joint_metrics[0].joint_mse);
 }
 
 #[test]

@@ -20,6 +20,7 @@ mod dataset_writer;
 mod error;
 mod files;
 mod ids;
+mod joint_scale;
 mod layout;
 mod memory_files;
 mod normalization;
@@ -36,6 +37,7 @@ pub use dataset_writer::DatasetWriter;
 pub use error::DataError;
 pub use files::{Disk, Files};
 pub use ids::id_list;
+pub use joint_scale::JointScale;
 pub use layout::{
     endpoint_path, image_sizes_text, joint_path, object_path, sequence_dir, IMAGE_SIZES,
     MAX_IMAGE_SIZE,

@@ -1,5 +1,7 @@
 use serde::{Deserialize, Serialize};
 
+use super::JointScale;
+
 /// Joint normalisation statistics of a dataset: the model sees `(joint - mean) / std` per
 /// column and predicts in that space. Saved in the model file, so predictions can be mapped
 /// back to radians (and gripper units) with the statistics the model was trained on.
@@ -58,6 +60,18 @@ impl Normalization {
         out
     }
 
+    /// These statistics with the arm angles' scale chosen by `scale`: for
+    /// [`JointScale::Shared`], one standard deviation for the six of them (the root mean square
+    /// of theirs), the gripper's unchanged.
+    pub fn scaled(mut self, scale: JointScale) -> Self {
+        if scale == JointScale::Shared {
+            let arm = &mut self.std[..6];
+            let shared = (arm.iter().map(|s| s * s).sum::<f32>() / arm.len() as f32).sqrt();
+            arm.fill(shared);
+        }
+        self
+    }
+
     /// `(joints - mean) / std`, column by column.
     pub fn normalize(&self, joints: &[f32; 7]) -> [f32; 7] {
         std::array::from_fn(|j| (joints[j] - self.mean[j]) / self.std[j])
@@ -111,5 +125,17 @@ mod tests {
         assert_eq!(back, rows[1]);
         assert_eq!(n.distance(&rows), 2.0 / 7.0);
         assert_eq!(n.distance(&[]), f64::INFINITY);
+    }
+
+    #[test]
+    fn a_shared_scale_is_the_arm_s_root_mean_square_and_keeps_the_gripper_s() {
+        let n = Normalization {
+            mean: [1.0; 7],
+            std: [1.0, 1.0, 1.0, 1.0, 7.0, 1.0, 0.5],
+        };
+        assert_eq!(n.scaled(JointScale::PerJoint), n);
+        let shared = n.scaled(JointScale::Shared);
+        assert_eq!(shared.mean, n.mean);
+        assert_eq!(shared.std, [3.0, 3.0, 3.0, 3.0, 3.0, 3.0, 0.5]);
     }
 }

@@ -4,6 +4,7 @@ use serde::{Deserialize, Deserializer, Serialize};
 
 use super::TrainError;
 use crate::augment::TimeWarpConfig;
+use crate::data::JointScale;
 use crate::model::{Initialization, ModelConfig, ModelKind};
 
 /// Learning-rate schedule over the run, a pure function of the step (so resuming needs no
@@ -123,6 +124,10 @@ pub struct TrainConfig {
     /// thread); the batches are the same for any size.
     #[serde(default = "default_frame_cache_mib")]
     pub frame_cache_mib: usize,
+    /// How the joint normalisation, fitted on the training data, scales the arm angles: per
+    /// joint, or one scale for all six so that the loss counts their radians alike.
+    #[serde(default)]
+    pub joint_scale: JointScale,
 }
 
 /// [`TrainConfig::frame_cache_mib`]'s default: 21,000 frames at 64 px (all of 350 sequences of
@@ -161,6 +166,7 @@ impl TrainConfig {
             initialization: Initialization::He,
             half: false,
             frame_cache_mib: default_frame_cache_mib(),
+            joint_scale: JointScale::PerJoint,
         }
     }
 

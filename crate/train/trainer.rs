@@ -124,7 +124,7 @@ impl Trainer {
         // for a run on that file's data, and right for other data (the original DMBN data's
         // joints lie radians away from the simulator's: the file's statistics would feed the
         // network values hundreds of σ off).
-        let normalization = Normalization::fit(train.joints());
+        let normalization = Normalization::fit(train.joints()).scaled(config.joint_scale);
         let optim = optimizer(&config);
         let state = CheckpointState {
             step: 0,

@@ -270,6 +270,16 @@ class Normalization:
         std = np.sqrt(var).astype(np.float32)
         return cls(mean.astype(np.float32), np.where(std < MIN_STD, np.float32(1), std))
 
+    def scaled(self, joint_scale):
+        """Normalization::scaled: "shared" divides the six arm angles by one scale, the root
+        mean square of their standard deviations (the gripper keeps its own)."""
+        if joint_scale not in ("per-joint", "shared"):
+            raise ValueError(f"joint_scale {joint_scale!r}: expected per-joint or shared")
+        std = self.std.copy()
+        if joint_scale == "shared":
+            std[:6] = np.sqrt((std[:6] * std[:6]).sum(dtype=np.float32) / np.float32(6))
+        return Normalization(self.mean, std)
+
     def normalize(self, joints):
         return (np.asarray(joints, np.float32) - self.mean) / self.std
 

@@ -124,7 +124,7 @@ def train_config(args):
         "val_fraction": args.val_fraction, "val_every": args.val_every, "val_batches": 8,
         "checkpoint_every": args.checkpoint_every,
         "augment": warp.to_json() if warp else None, "init": args.init, "half": args.half,
-        "initialization": args.initialization,
+        "initialization": args.initialization, "joint_scale": args.joint_scale,
     }
     for field in ["steps", "batch", "max_contexts", "targets_per_sequence", "val_every",
                   "checkpoint_every"]:
@@ -183,7 +183,8 @@ class Run:
         if state:
             self.normalization = Normalization(**state["normalization"])
         else:
-            self.normalization = Normalization.fit(s.joints for s in self.split.train)
+            self.normalization = Normalization.fit(s.joints for s in self.split.train).scaled(
+                c.get("joint_scale", "per-joint"))
         header = {"config": c["model"], "normalization": self.normalization.to_json()}
         self.predictor = Predictor(header).to(world.device)
         network = self.predictor.network
@@ -344,6 +345,8 @@ def arguments(argv=None):
     a("--half", action="store_true", help="write model.safetensors with f16 weights")
     a("--initialization", choices=["he", "glorot"], default="he",
       help="fresh weights: he (the project's) or glorot (the original Keras model's; dmbn, pte)")
+    a("--joint-scale", choices=["per-joint", "shared"], default="per-joint",
+      help="per-joint standardises each joint; shared divides the six arm angles by one scale")
     a("--device", default="auto", help="auto (cuda when there is one), cpu or cuda")
     return p.parse_args(argv)
 
