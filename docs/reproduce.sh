@@ -98,16 +98,22 @@ if [ "${TRAIN:-0}" = 1 ]; then
       # DMBN-PTE's trained file, then the time warps (run after sim/pte: models are in that order).
       sim/pte-aug) stage pte-aug "${longer[@]}" --init "$out/runs/pte-2/model.dmbn" --augment --steps 2000 --seed 5
         file[$m]=$out/runs/pte-aug/model.dmbn ;;
-      # The simulator's trained DMBN and DMBN-PTE fine-tuned here (then, for DMBN-PTE, longer
-      # at half the rate; the time warps start from its first stage).
+      # The simulator's trained DMBN and DMBN-PTE fine-tuned here (DMBN-PTE then longer at half
+      # the rate), then at half the rate with one normalising scale for the arm's joints
+      # (--joint-scale shared: the wrist sweeps radians, the others tenths); the time warps
+      # start from DMBN-PTE's last stage.
       2020/dmbn) init=$(sim_file dmbn-4)
         stage dmbn --init "$init" --steps 3000 --lr 5e-4 --seed 11 --beta-nll 1
-        file[$m]=$out/runs/dmbn/model.dmbn ;;
+        stage dmbn-2 --init "$out/runs/dmbn/model.dmbn" --joint-scale shared --steps 1000 --lr 2.5e-4 --seed 11 --beta-nll 1
+        stage dmbn-3 --init "$out/runs/dmbn-2/model.dmbn" --joint-scale shared --steps 2000 --lr 2.5e-4 --seed 22 --beta-nll 1
+        file[$m]=$out/runs/dmbn-3/model.dmbn ;;
       2020/pte) init=$(sim_file pte-2)
         stage pte --init "$init" --steps 3000 --lr 5e-4 --seed 12 --beta-nll 1
         stage pte-2 --init "$out/runs/pte/model.dmbn" --steps 2500 --lr 2.5e-4 --seed 13 --beta-nll 1
-        file[$m]=$out/runs/pte-2/model.dmbn ;;
-      2020/pte-aug) stage pte-aug --init "$out/runs/pte/model.dmbn" --augment --steps 2000 --lr 2.5e-4 --seed 14 --beta-nll 1
+        stage pte-3 --init "$out/runs/pte-2/model.dmbn" --joint-scale shared --steps 1000 --lr 2.5e-4 --seed 11 --beta-nll 1
+        stage pte-4 --init "$out/runs/pte-3/model.dmbn" --joint-scale shared --steps 2000 --lr 2.5e-4 --seed 21 --beta-nll 1
+        file[$m]=$out/runs/pte-4/model.dmbn ;;
+      2020/pte-aug) stage pte-aug --init "$out/runs/pte-4/model.dmbn" --joint-scale shared --augment --steps 2000 --lr 2.5e-4 --seed 25 --beta-nll 1
         file[$m]=$out/runs/pte-aug/model.dmbn ;;
       # The simulator's attentive model (stage attn-3 of the sim reproduction) fine-tuned here.
       2020/attn) init=$(sim_file attn-3)
