@@ -113,7 +113,7 @@ if [ "${TRAIN:-0}" = 1 ]; then
         stage pte-3 --init "$out/runs/pte-2/model.dmbn" --joint-scale shared --steps 1000 --lr 2.5e-4 --seed 11 --beta-nll 1
         stage pte-4 --init "$out/runs/pte-3/model.dmbn" --joint-scale shared --steps 2000 --lr 2.5e-4 --seed 21 --beta-nll 1
         file[$m]=$out/runs/pte-4/model.dmbn ;;
-      2020/pte-aug) stage pte-aug --init "$out/runs/pte-4/model.dmbn" --joint-scale shared --augment --steps 2000 --lr 2.5e-4 --seed 25 --beta-nll 1
+      2020/pte-aug) stage pte-aug --init "$out/runs/pte-4/model.dmbn" --joint-scale shared --augment --steps 3000 --lr 1.25e-4 --seed 29 --beta-nll 1
         file[$m]=$out/runs/pte-aug/model.dmbn ;;
       # The simulator's attentive model (stage attn-3 of the sim reproduction) fine-tuned here.
       2020/attn) init=$(sim_file attn-3)
