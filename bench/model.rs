@@ -1,4 +1,5 @@
-//! `cargo bench --bench model`: DMBN, DMBN-PTE and the attentive model on the CPU (burn flex), 64×64 frames.
+//! `cargo bench --bench model [-- --image-size 128]`: DMBN, DMBN-PTE and the attentive model on
+//! the CPU (burn flex), 64×64 frames (or 128×128, the original data's: what the larger input costs).
 //! Medians over repetitions of: one training step (8 sequences × 5 contexts × 4 targets:
 //! forward, backward, Adam), inference of one target from 5 contexts, and of a 100-step
 //! sequence from 5 contexts (encode once, decode in chunks). `bench/model.sh` runs this next
@@ -13,7 +14,7 @@ use rand::SeedableRng;
 use rand_pcg::Pcg64;
 
 use dmbn::augment::{Sampler, SamplerConfig};
-use dmbn::data::Normalization;
+use dmbn::data::{Normalization, IMAGE_SIZES};
 use dmbn::model::{tensors, ModelConfig, ModelKind};
 use dmbn::predict::{Observations, Predictor};
 use dmbn::sim::{self, Action};
@@ -39,11 +40,18 @@ fn main() {
     if std::env::args().any(|a| a == "--test" || a == "--list") {
         return;
     }
+    let size = match image_size() {
+        Ok(size) => size,
+        Err(message) => {
+            eprintln!("error: {message}");
+            std::process::exit(2);
+        }
+    };
     let pool: Vec<_> = (0..4)
         .flat_map(|seed| {
             Action::ALL
                 .into_iter()
-                .map(move |a| sim::episode(a, seed, 64).expect("simulator"))
+                .map(move |a| sim::episode(a, seed, size as u32).expect("simulator"))
         })
         .collect();
     let norm = Normalization::fit(pool.iter().flat_map(|s| s.joints.iter()));
@@ -59,13 +67,14 @@ fn main() {
     });
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
     println!(
-        "model benchmark: burn flex, 64x64, median of {REPEATS} runs, {threads} threads available"
+        "model benchmark: burn flex, {size}x{size}, median of {REPEATS} runs, {threads} threads available"
     );
     let mut json = Vec::new();
     for kind in ModelKind::ALL {
         let device = Device::flex().autodiff();
         device.seed(0);
-        let mut model = ModelConfig::new(kind).init(&device).expect("valid config");
+        let config = ModelConfig::new(kind).with_image_size(size);
+        let mut model = config.init(&device).expect("valid config");
         let mut optim = AdamConfig::new()
             .with_grad_clipping(Some(GradientClippingConfig::Norm(1.0)))
             .init();
@@ -82,7 +91,7 @@ fn main() {
         });
 
         let device = Device::flex();
-        let fresh = ModelConfig::new(kind).init(&device).expect("valid config");
+        let fresh = config.init(&device).expect("valid config");
         let predictor = Predictor::new(fresh, norm);
         let seq = &pool[0];
         let observations = Observations::from_sequence(seq, &[0, 10, 20, 30, 40]).expect("steps");
@@ -105,8 +114,23 @@ fn main() {
             "{kind:>5}: train step {train:8.1} ms   infer 1 target {one:7.2} ms   infer 100 steps {sequence:8.1} ms"
         );
         json.push(format!(
-            "{{\"model\":\"{kind}\",\"train_step_ms\":{train:.2},\"infer_one_ms\":{one:.3},\"infer_sequence100_ms\":{sequence:.2}}}"
+            "{{\"model\":\"{kind}\",\"image_size\":{size},\"train_step_ms\":{train:.2},\"infer_one_ms\":{one:.3},\"infer_sequence100_ms\":{sequence:.2}}}"
         ));
     }
     println!("json: [{}]", json.join(","));
+}
+
+/// The frame size from `--image-size N` (default 64): one the networks are defined for.
+fn image_size() -> Result<usize, String> {
+    let args: Vec<String> = std::env::args().collect();
+    let Some(i) = args.iter().position(|a| a == "--image-size") else {
+        return Ok(64);
+    };
+    let value = args.get(i + 1).map(String::as_str).unwrap_or("");
+    match value.parse::<usize>() {
+        Ok(size) if IMAGE_SIZES.contains(&size) => Ok(size),
+        _ => Err(format!(
+            "--image-size is {value:?}: expected one of {IMAGE_SIZES:?}"
+        )),
+    }
 }
