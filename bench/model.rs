@@ -14,7 +14,7 @@ use rand::SeedableRng;
 use rand_pcg::Pcg64;
 
 use dmbn::augment::{Sampler, SamplerConfig};
-use dmbn::data::{Normalization, IMAGE_SIZES};
+use dmbn::data::{image_sizes_text, Normalization, IMAGE_SIZES};
 use dmbn::model::{tensors, ModelConfig, ModelKind};
 use dmbn::predict::{Observations, Predictor};
 use dmbn::sim::{self, Action};
@@ -130,7 +130,8 @@ fn image_size() -> Result<usize, String> {
     match value.parse::<usize>() {
         Ok(size) if IMAGE_SIZES.contains(&size) => Ok(size),
         _ => Err(format!(
-            "--image-size is {value:?}: expected one of {IMAGE_SIZES:?}"
+            "--image-size is {value:?}: expected {}",
+            image_sizes_text()
         )),
     }
 }
