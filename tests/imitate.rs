@@ -12,10 +12,10 @@ use std::path::Path;
 use std::process::Command;
 
 use dmbn::data::Sequence;
-use dmbn::imitate::{imitate, mean_motion, replay, OutcomeSums, Task};
+use dmbn::imitate::{enact, imitate, mean_motion, replay, OutcomeSums, Task};
 use dmbn::predict::Predictor;
 use dmbn::quality::MeanMotion;
-use dmbn::sim::{episode, perform, Action, Outcome, SimError, Simulator, Trajectory};
+use dmbn::sim::{episode, perform, Action, Outcome, PushMiss, SimError, Simulator, Trajectory};
 
 fn object(demo: &Sequence) -> [f32; 2] {
     [demo.object[0][0], demo.object[0][1]]
@@ -67,6 +67,7 @@ fn wrong_trajectories_fail_their_outcome() {
     let o = Outcome::judge(Action::Grasp, &p, &demo).unwrap();
     assert!(!o.success && o.lift_cm < 2.0, "{o:?}");
     assert!(o.summary().starts_with("missed"), "{}", o.summary());
+    assert_eq!(o.push_error_cm, None, "a grasp has no push direction");
 
     let demo = episode(Action::Move, 5, 64).unwrap();
     let home = vec![demo.joints[0]; demo.len()];
@@ -74,6 +75,14 @@ fn wrong_trajectories_fail_their_outcome() {
     let o = Outcome::judge(Action::Move, &p, &demo).unwrap();
     assert!(!o.success && o.object_error_cm > 5.0, "{o:?}");
     assert!(o.path_error_cm > 5.0, "{o:?}");
+    // Never pushed: short by the demonstration's whole travel, not aside.
+    let e = o.push_error_cm.expect("a push has a direction");
+    assert_eq!(e.miss(), PushMiss::Short, "{e:?}");
+    assert!(
+        (e.along.abs() - o.object_error_cm).abs() < 0.5,
+        "{e:?} {o:?}"
+    );
+    assert!(o.summary().contains("cm short"), "{}", o.summary());
 }
 
 #[test]
@@ -163,7 +172,53 @@ fn rows_count_successes_against_the_ceiling() {
     let row = model.row("m", "grasp", Some(&ceiling));
     assert_eq!((row.episodes, row.successes), (4, 3));
     assert!((row.of_ceiling.unwrap() - 0.75).abs() < 1e-12);
+    assert_eq!(row.push_misses, None, "grasps have no push misses");
     assert_eq!(ceiling.row("c", "grasp", None).of_ceiling, None);
+}
+
+#[test]
+fn rows_say_how_pushes_missed_and_which_joint_erred() {
+    let demo = episode(Action::Move, 6, 64).unwrap();
+    let good = replay(&demo, Action::Move).unwrap();
+    // The base joint 0.05 rad off at every step, the other joints as recorded: the finger
+    // meets the object off its centre and knocks it aside (measured: 28 cm to the right).
+    let mut rows = demo.joints.clone();
+    rows.iter_mut().for_each(|r| r[0] -= 0.05);
+    let turned = enact(&demo, Action::Move, rows, Vec::new()).unwrap();
+    let e = turned.outcome.push_error_cm.unwrap();
+    assert_eq!(e.miss(), PushMiss::Aside, "{e:?}");
+    assert!(turned.outcome.summary().contains("to the right"), "{e:?}");
+    // Never leaving home: short.
+    let home = enact(
+        &demo,
+        Action::Move,
+        vec![demo.joints[0]; demo.len()],
+        vec![],
+    )
+    .unwrap();
+    let mut sums = OutcomeSums::default();
+    for i in [&good, &turned, &home, &home] {
+        sums.add(i);
+    }
+    let row = sums.row("m", "move", None);
+    let misses = row.push_misses.expect("a push row counts its misses");
+    assert_eq!((misses.short, misses.long, misses.aside), (2, 0, 1));
+    // Per joint: the turned trajectory errs 0.05 rad in the base joint alone.
+    assert!((turned.joint_se[0] - 0.0025 * demo.len() as f64).abs() < 1e-4);
+    assert_eq!(turned.joint_se[1..], [0.0; 5]);
+    let steps = 4.0 * demo.len() as f64;
+    let se = |j: usize| {
+        [&turned, &home, &home]
+            .iter()
+            .map(|i| i.joint_se[j])
+            .sum::<f64>()
+    };
+    assert_eq!(row.joint_rmse_per_joint.len(), 6);
+    for j in 0..6 {
+        assert!((row.joint_rmse_per_joint[j] - (se(j) / steps).sqrt()).abs() < 1e-9);
+    }
+    let total: f64 = (0..6).map(se).sum();
+    assert!((row.joint_rmse - (total / (steps * 6.0)).sqrt()).abs() < 1e-9);
 }
 
 /// The golden imitation: native writes it (`DMBN_BLESS=1`) and must reproduce it; the wasm
@@ -256,6 +311,26 @@ fn dmbn_imitate_prints_tables_and_writes_json() {
     // Every performance: 3 ids × 2 actions × 3 rows.
     assert_eq!(reports[1]["performances"].as_array().unwrap().len(), 18);
     assert!(reports[1]["performances"][0]["success"].is_boolean());
+    // Pushes say how they missed; every row says which joint erred.
+    assert!(stdout.contains("misses: short / long / aside"), "{stdout}");
+    let rows = reports[0]["rows"].as_array().unwrap();
+    for row in rows {
+        assert_eq!(row["joint_rmse_per_joint"].as_array().unwrap().len(), 6);
+        let misses = &row["push_misses"];
+        if row["action"] == "grasp" {
+            assert!(misses.is_null(), "{row}");
+            continue;
+        }
+        let n = |k: &str| misses[k].as_u64().unwrap();
+        let missed = row["episodes"].as_u64().unwrap() - row["successes"].as_u64().unwrap();
+        assert_eq!(n("short") + n("long") + n("aside"), missed, "{row}");
+    }
+    let floor = &rows[4];
+    assert_eq!(floor["name"], "floor: mean motion");
+    assert!(
+        floor["joint_rmse_per_joint"][0].as_f64().unwrap() > 0.0,
+        "{floor}"
+    );
 
     // No sequence in the ids asked for.
     let err = Command::new(env!("CARGO_BIN_EXE_dmbn"))

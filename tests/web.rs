@@ -685,6 +685,20 @@ fn imitation_matches_native() {
     }
     let r = replay(&ep, action.into()).unwrap();
     assert_eq!(r.performance().digest(), golden.replay_digest);
+    let outcome: serde_json::Value = serde_wasm_bindgen::from_value(r.outcome().unwrap()).unwrap();
+    assert!(outcome["push_error_cm"].is_null(), "a grasp: {outcome}");
+    // A push that never leaves home: short by the demonstration's travel, said in the summary.
+    let push = run_episode("move".into(), num(5.0), num(64.0)).unwrap();
+    let home: Vec<f32> = (0..push.joints().len() / 7)
+        .flat_map(|_| push.joints()[..7].to_vec())
+        .collect();
+    let e = enact(&push, "move".into(), f32s(&home), u32s(&[])).unwrap();
+    let outcome: serde_json::Value = serde_wasm_bindgen::from_value(e.outcome().unwrap()).unwrap();
+    let along = outcome["push_error_cm"]["along"].as_f64().unwrap();
+    assert!(along < -5.0, "{outcome}");
+    assert!(outcome["push_error_cm"]["across"].is_number(), "{outcome}");
+    let summary = outcome["summary"].as_str().unwrap();
+    assert!(summary.contains("cm short"), "{summary}");
     assert_eq!(r.observed(), Vec::<u32>::new());
     assert_eq!(r.joint_rmse(), 0.0);
 }

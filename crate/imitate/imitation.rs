@@ -6,7 +6,7 @@ use crate::quality::MeanMotion;
 use crate::sim::{perform, Action, Outcome, Trajectory};
 
 /// Arm joints among the [`JOINTS`] values (the last one is the gripper).
-const ARM: usize = JOINTS - 1;
+pub(super) const ARM: usize = JOINTS - 1;
 
 /// One performance of a demonstration's action: the trajectory the arm was given, what it
 /// did, and how that went.
@@ -22,9 +22,9 @@ pub struct Imitation {
     pub observed: Vec<usize>,
     /// The first step performed from the trajectory's own rows rather than the recording.
     pub predicted_from: usize,
-    /// Squared error of the arm joints (radians²) summed over the steps from
+    /// Squared error of each arm joint (radians²) summed over the steps from
     /// `predicted_from` on, against the demonstration's recorded joints.
-    pub joint_se: f64,
+    pub joint_se: [f64; ARM],
     /// How many steps `joint_se` sums over.
     pub joint_steps: usize,
 }
@@ -32,13 +32,13 @@ pub struct Imitation {
 impl Imitation {
     /// Root mean squared error of the trajectory's arm joints at its own steps (radians).
     pub fn joint_rmse(&self) -> f64 {
-        joint_rmse(self.joint_se, self.joint_steps)
+        joint_rmse(self.joint_se.iter().sum(), self.joint_steps * ARM)
     }
 }
 
-/// The RMSE of the arm joints from their squared errors summed over `steps` steps (0 for none).
-pub(super) fn joint_rmse(se: f64, steps: usize) -> f64 {
-    (se / (steps * ARM).max(1) as f64).sqrt()
+/// The RMSE of `values` squared errors summed in `se` (0 for none).
+pub(super) fn joint_rmse(se: f64, values: usize) -> f64 {
+    (se / values.max(1) as f64).sqrt()
 }
 
 /// `predictor` imitates `demo` (an episode of `action`): it observes the `task`'s steps
@@ -143,11 +143,12 @@ fn act(
     )?;
     let outcome = Outcome::judge(action, &performance, demo)
         .ok_or_else(|| ImitateError::Invalid("an empty demonstration".into()))?;
-    let joint_se = trajectory[from..]
-        .iter()
-        .zip(&demo.joints[from..])
-        .flat_map(|(a, b)| (0..ARM).map(move |j| (a[j] as f64 - b[j] as f64).powi(2)))
-        .sum();
+    let mut joint_se = [0.0; ARM];
+    for (a, b) in trajectory[from..].iter().zip(&demo.joints[from..]) {
+        for (j, se) in joint_se.iter_mut().enumerate() {
+            *se += (a[j] as f64 - b[j] as f64).powi(2);
+        }
+    }
     Ok(Imitation {
         trajectory,
         performance,

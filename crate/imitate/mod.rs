@@ -11,6 +11,6 @@ mod task;
 
 pub use error::ImitateError;
 pub use imitation::{enact, imitate, mean_motion, replay, Imitation};
-pub use report::{ImitationReport, ImitationRow, OutcomeSums};
+pub use report::{ImitationReport, ImitationRow, OutcomeSums, PushMisses};
 pub use task::Task;
 pub use task::TaskSteps;

@@ -2,7 +2,9 @@ use std::fmt::Write;
 
 use serde::Serialize;
 
-use super::imitation::joint_rmse;
+use crate::sim::{Action, PushMiss};
+
+use super::imitation::{joint_rmse, ARM};
 use super::{Imitation, Task};
 
 /// One row's performances of one action, summed over demonstrations.
@@ -15,7 +17,8 @@ pub struct OutcomeSums {
     lift_cm: Vec<f32>,
     object_error_cm: Vec<f32>,
     path_error_cm: Vec<f32>,
-    joint_se: f64,
+    misses: PushMisses,
+    joint_se: [f64; ARM],
     joint_steps: usize,
 }
 
@@ -28,7 +31,12 @@ impl OutcomeSums {
         self.lift_cm.push(o.lift_cm);
         self.object_error_cm.push(o.object_error_cm);
         self.path_error_cm.push(o.path_error_cm);
-        self.joint_se += imitation.joint_se;
+        if let (false, Some(e)) = (o.success, o.push_error_cm) {
+            self.misses.add(e.miss());
+        }
+        for (sum, se) in self.joint_se.iter_mut().zip(imitation.joint_se) {
+            *sum += se;
+        }
         self.joint_steps += imitation.joint_steps;
     }
 
@@ -54,8 +62,35 @@ impl OutcomeSums {
             lift_cm: median(&self.lift_cm),
             object_error_cm: median(&self.object_error_cm),
             path_error_cm: median(&self.path_error_cm),
-            joint_rmse: joint_rmse(self.joint_se, self.joint_steps),
+            push_misses: (action == Action::Move.name()).then_some(self.misses),
+            joint_rmse: joint_rmse(self.joint_se.iter().sum(), self.joint_steps * ARM),
+            joint_rmse_per_joint: self
+                .joint_se
+                .iter()
+                .map(|&se| joint_rmse(se, self.joint_steps))
+                .collect(),
         }
+    }
+}
+
+/// The missed pushes of a row, by how they missed ([`PushMiss`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+pub struct PushMisses {
+    /// Pushed too little.
+    pub short: usize,
+    /// Pushed too far.
+    pub long: usize,
+    /// Knocked aside.
+    pub aside: usize,
+}
+
+impl PushMisses {
+    fn add(&mut self, miss: PushMiss) {
+        *match miss {
+            PushMiss::Short => &mut self.short,
+            PushMiss::Long => &mut self.long,
+            PushMiss::Aside => &mut self.aside,
+        } += 1;
     }
 }
 
@@ -91,9 +126,13 @@ pub struct ImitationRow {
     pub object_error_cm: f64,
     /// Median over performances of the grasp point's mean distance to the demonstration's, cm.
     pub path_error_cm: f64,
+    /// Pushes: the missed ones by how they missed (absent for grasps).
+    pub push_misses: Option<PushMisses>,
     /// RMSE of the performed trajectory's arm joints against the demonstration's, at the
     /// steps it predicted (radians; 0 for the ceiling).
     pub joint_rmse: f64,
+    /// The same per arm joint, base to wrist (which joint a model reads or moves worst).
+    pub joint_rmse_per_joint: Vec<f64>,
 }
 
 /// `dmbn imitate`'s result for one task.
@@ -112,7 +151,7 @@ impl ImitationReport {
     /// A Markdown table of the rows.
     pub fn table(&self) -> String {
         let mut out = format!(
-            "task {} ({} observations, blend {}):\n\n| action | trajectory | episodes | success | of ceiling | lift (cm, median) | object error (cm, median) | path error (cm, median) | joint RMSE (rad) |\n|---|---|---:|---:|---:|---:|---:|---:|---:|\n",
+            "task {} ({} observations, blend {}):\n\n| action | trajectory | episodes | success | of ceiling | lift (cm, median) | object error (cm, median) | path error (cm, median) | misses: short / long / aside | joint RMSE (rad) |\n|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n",
             self.task,
             match self.task {
                 Task::Frames => self.observations,
@@ -124,9 +163,12 @@ impl ImitationReport {
             let of = r
                 .of_ceiling
                 .map_or("—".to_string(), |v| format!("{:.0}%", v * 100.0));
+            let misses = r.push_misses.map_or("—".to_string(), |m| {
+                format!("{} / {} / {}", m.short, m.long, m.aside)
+            });
             let _ = writeln!(
                 out,
-                "| {} | {} | {} | {}/{} ({:.0}%) | {of} | {:.1} | {:.2} | {:.2} | {:.3} |",
+                "| {} | {} | {} | {}/{} ({:.0}%) | {of} | {:.1} | {:.2} | {:.2} | {misses} | {:.3} |",
                 r.action,
                 r.name,
                 r.episodes,

@@ -1,6 +1,6 @@
 use serde::Serialize;
 
-use super::Action;
+use super::{Action, PushError};
 use crate::data::Sequence;
 
 /// What a performed action achieved, judged against the demonstration it imitates (the same
@@ -18,6 +18,11 @@ pub struct Outcome {
     pub lift_cm: f32,
     /// The object's final position against the demonstration's, cm.
     pub object_error_cm: f32,
+    /// A push's object error resolved along the demonstration's push (the object's horizontal
+    /// travel; negative: short of the spot) and across it (positive: to the push's left), cm:
+    /// pushed too little or too far, or knocked aside. `None` for a grasp (or a
+    /// demonstration whose object did not travel).
+    pub push_error_cm: Option<PushError>,
     /// The mean distance between the grasp point and the demonstration's at the same phase, cm.
     pub path_error_cm: f32,
 }
@@ -39,6 +44,10 @@ impl Outcome {
         let goal = demonstration.object.last()?;
         let lift_cm = (last[2] - first[2]) * 100.0;
         let object_error_cm = distance(last, goal) * 100.0;
+        let push_error_cm = match action {
+            Action::Grasp => None,
+            Action::Move => PushError::of(demonstration.object.first()?, goal, last),
+        };
         let n = performed.len();
         let path: f32 = (0..n)
             .map(|k| {
@@ -61,6 +70,7 @@ impl Outcome {
             success,
             lift_cm,
             object_error_cm,
+            push_error_cm,
             path_error_cm: path / n as f32 * 100.0,
         })
     }
@@ -75,10 +85,15 @@ impl Outcome {
                 "pushed to {:.1} cm of the demonstration's spot",
                 self.object_error_cm
             ),
-            (Action::Move, false) => format!(
-                "missed: the object ended {:.1} cm from the demonstration's spot",
-                self.object_error_cm
-            ),
+            (Action::Move, false) => {
+                let why = self
+                    .push_error_cm
+                    .map_or(String::new(), |e| format!(": {e}"));
+                format!(
+                    "missed: the object ended {:.1} cm from the demonstration's spot{why}",
+                    self.object_error_cm
+                )
+            }
         }
     }
 }

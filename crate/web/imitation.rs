@@ -36,9 +36,10 @@ struct OutcomeValue {
 
 #[wasm_bindgen]
 impl Imitation {
-    /// `{action, success, lift_cm, object_error_cm, path_error_cm, summary}`: did the grasp
-    /// lift the object 10 cm, did the push land it within 3 cm of the demonstration's spot, and
-    /// a line for people ("lifted 21 cm").
+    /// `{action, success, lift_cm, object_error_cm, push_error_cm, path_error_cm, summary}`:
+    /// did the grasp lift the object 10 cm, did the push land it within 3 cm of the
+    /// demonstration's spot (`push_error_cm`: `{along, across}` of its push, `null` for a
+    /// grasp), and a line for people ("lifted 21 cm").
     #[wasm_bindgen(getter)]
     pub fn outcome(&self) -> Result<JsValue, JsError> {
         let value = OutcomeValue {
