@@ -12,7 +12,7 @@ use std::path::Path;
 use std::process::Command;
 
 use dmbn::data::Sequence;
-use dmbn::imitate::{enact, imitate, mean_motion, replay, OutcomeSums, Task};
+use dmbn::imitate::{enact, imitate, mean_motion, replay, with_noise, OutcomeSums, Task};
 use dmbn::predict::Predictor;
 use dmbn::quality::MeanMotion;
 use dmbn::sim::{episode, perform, Action, Outcome, PushMiss, SimError, Simulator, Trajectory};
@@ -156,6 +156,36 @@ fn finish_performs_the_observed_part_as_recorded() {
 }
 
 #[test]
+fn noisy_replays_err_by_the_rmse_asked_for() {
+    let demo = episode(Action::Move, 6, 64).unwrap();
+    // No noise: the ceiling itself.
+    let exact = with_noise(&demo, Action::Move, Task::Frames, 5, 0.0, 1)
+        .unwrap()
+        .unwrap();
+    let ceiling = replay(&demo, Action::Move).unwrap();
+    assert_eq!(exact.performance.digest(), ceiling.performance.digest());
+    for task in Task::ALL {
+        let n = with_noise(&demo, Action::Move, task, 5, 0.02, 1)
+            .unwrap()
+            .unwrap();
+        let from = n.predicted_from;
+        assert_eq!(n.trajectory[..from], demo.joints[..from], "{task}");
+        assert!(
+            (n.joint_rmse() - 0.02).abs() < 1e-4,
+            "{task}: {}",
+            n.joint_rmse()
+        );
+        assert!(n.observed.is_empty());
+        // The gripper column is the recording's.
+        assert!(n
+            .trajectory
+            .iter()
+            .zip(&demo.joints)
+            .all(|(a, b)| a[6] == b[6]));
+    }
+}
+
+#[test]
 fn rows_count_successes_against_the_ceiling() {
     let demo = episode(Action::Grasp, 9, 64).unwrap();
     let good = replay(&demo, Action::Grasp).unwrap();
@@ -178,12 +208,12 @@ fn rows_count_successes_against_the_ceiling() {
 
 #[test]
 fn rows_say_how_pushes_missed_and_which_joint_erred() {
-    let demo = episode(Action::Move, 6, 64).unwrap();
+    let demo = episode(Action::Move, 5, 64).unwrap();
     let good = replay(&demo, Action::Move).unwrap();
-    // The base joint 0.05 rad off at every step, the other joints as recorded: the finger
-    // meets the object off its centre and knocks it aside (measured: 28 cm to the right).
+    // The base joint 0.08 rad off at every step, the other joints as recorded: the finger
+    // meets the object off its centre and knocks it aside (measured: 9.9 cm to the right).
     let mut rows = demo.joints.clone();
-    rows.iter_mut().for_each(|r| r[0] -= 0.05);
+    rows.iter_mut().for_each(|r| r[0] -= 0.08);
     let turned = enact(&demo, Action::Move, rows, Vec::new()).unwrap();
     let e = turned.outcome.push_error_cm.unwrap();
     assert_eq!(e.miss(), PushMiss::Aside, "{e:?}");
@@ -203,8 +233,8 @@ fn rows_say_how_pushes_missed_and_which_joint_erred() {
     let row = sums.row("m", "move", None);
     let misses = row.push_misses.expect("a push row counts its misses");
     assert_eq!((misses.short, misses.long, misses.aside), (2, 0, 1));
-    // Per joint: the turned trajectory errs 0.05 rad in the base joint alone.
-    assert!((turned.joint_se[0] - 0.0025 * demo.len() as f64).abs() < 1e-4);
+    // Per joint: the turned trajectory errs 0.08 rad in the base joint alone.
+    assert!((turned.joint_se[0] - 0.0064 * demo.len() as f64).abs() < 1e-4);
     assert_eq!(turned.joint_se[1..], [0.0; 5]);
     let steps = 4.0 * demo.len() as f64;
     let se = |j: usize| {
@@ -275,7 +305,7 @@ fn dmbn_imitate_prints_tables_and_writes_json() {
         .arg(support::asset("models/dmbn-sim.dmbn"))
         .arg("--data")
         .arg(&data)
-        .args(["--ids", "0-2", "--json"])
+        .args(["--ids", "0-2", "--noise", "0.002", "--json"])
         .arg(&json)
         .output()
         .unwrap();
@@ -305,11 +335,17 @@ fn dmbn_imitate_prints_tables_and_writes_json() {
         serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
     assert_eq!(reports.as_array().unwrap().len(), 2);
     assert_eq!(reports[0]["task"], "frames");
-    // Per action: ceiling, floor, the model.
-    assert_eq!(reports[0]["rows"].as_array().unwrap().len(), 6);
-    assert_eq!(reports[0]["rows"][2]["name"], "dmbn-sim.dmbn");
-    // Every performance: 3 ids × 2 actions × 3 rows.
-    assert_eq!(reports[1]["performances"].as_array().unwrap().len(), 18);
+    // Per action: ceiling, floor, the noisy replay, the model.
+    assert_eq!(reports[0]["rows"].as_array().unwrap().len(), 8);
+    assert_eq!(
+        reports[0]["rows"][2]["name"],
+        "recorded joints + 0.002 rad noise"
+    );
+    let noisy = reports[0]["rows"][2]["joint_rmse"].as_f64().unwrap();
+    assert!((noisy - 0.002).abs() < 1e-4, "{noisy}");
+    assert_eq!(reports[0]["rows"][3]["name"], "dmbn-sim.dmbn");
+    // Every performance: 3 ids × 2 actions × 4 rows.
+    assert_eq!(reports[1]["performances"].as_array().unwrap().len(), 24);
     assert!(reports[1]["performances"][0]["success"].is_boolean());
     // Pushes say how they missed; every row says which joint erred.
     assert!(stdout.contains("misses: short / long / aside"), "{stdout}");
@@ -325,11 +361,27 @@ fn dmbn_imitate_prints_tables_and_writes_json() {
         let missed = row["episodes"].as_u64().unwrap() - row["successes"].as_u64().unwrap();
         assert_eq!(n("short") + n("long") + n("aside"), missed, "{row}");
     }
-    let floor = &rows[4];
+    let floor = &rows[5];
     assert_eq!(floor["name"], "floor: mean motion");
     assert!(
         floor["joint_rmse_per_joint"][0].as_f64().unwrap() > 0.0,
         "{floor}"
+    );
+
+    // A noise that is no RMSE.
+    let err = Command::new(env!("CARGO_BIN_EXE_dmbn"))
+        .args(["imitate", "--model"])
+        .arg(support::asset("models/dmbn-sim.dmbn"))
+        .arg("--data")
+        .arg(&data)
+        .args(["--noise", "2"])
+        .output()
+        .unwrap();
+    assert!(!err.status.success());
+    let stderr = String::from_utf8_lossy(&err.stderr);
+    assert!(
+        stderr.contains("expected a joint RMSE in radians"),
+        "{stderr}"
     );
 
     // No sequence in the ids asked for.

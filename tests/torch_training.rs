@@ -262,7 +262,13 @@ fn the_twin_computes_the_loss_and_gradients_the_rust_trainer_does() {
             values.image_mse,
             values.joint_mse,
         ];
-        let loss_diff = max_diff(&want, &twin["loss"]);
+        // Relative to the part's size (as the goldens compare): the image NLL sums thousands
+        // of f32 terms, a loss near 4 agrees to about 3e-5 of itself.
+        let loss_diff = want
+            .iter()
+            .zip(&twin["loss"])
+            .map(|(a, b)| (a - b).abs() / b.abs().max(1.0))
+            .fold(0.0, f32::max);
         // Every gradient, named as exported: the twin has exactly these tensors.
         assert_eq!(twin.len() - 1, rust.len(), "{kind}: tensor names");
         let (mut worst, mut worst_name, mut largest) = (0.0f32, String::new(), 0.0f32);
@@ -281,7 +287,7 @@ fn the_twin_computes_the_loss_and_gradients_the_rust_trainer_does() {
             }
         }
         let line = format!(
-            "{kind}: loss {:.6} (largest difference of the five parts {loss_diff:.2e}), {} \
+            "{kind}: loss {:.6} (largest relative difference of the five parts {loss_diff:.2e}), {} \
              gradients, largest |g| {largest:.3e}, largest difference {worst:.2e} ({worst_name})",
             values.total,
             rust.len()

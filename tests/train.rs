@@ -69,29 +69,36 @@ fn loss_falls_when_overfitting_a_tiny_dataset() {
 }
 
 fn loss_falls(models: &[ModelKind]) {
+    // Steps enough for every network to start drawing its frames: on the pair the simulator
+    // makes since its friction fix DMBN had not started by step 30 (image MSE 0.168 -> 0.167)
+    // and had by 60 (0.115), measured.
+    const STEPS: u64 = 60;
     let tmp = tempfile::tempdir().unwrap();
     let data = tmp.path().join("data");
     dataset(&data, 1);
     for &model in models {
         let out = tmp.path().join(model.name());
-        let mut config = small(model, 30);
+        let mut config = small(model, STEPS);
         config.lr = 3e-4;
         config.val_fraction = 0.0;
-        config.val_every = 30;
-        config.checkpoint_every = 30;
+        config.val_every = STEPS;
+        config.checkpoint_every = STEPS;
         let mut trainer = new_trainer(&data, &out, config).unwrap();
         let path = trainer.run(|_| {}).unwrap();
         assert!(path.exists());
         let m = metrics(&out);
-        assert_eq!(m.len(), 30);
+        assert_eq!(m.len(), STEPS as usize);
         let mean =
             |s: &[Metrics], f: fn(&Metrics) -> f32| s.iter().map(f).sum::<f32>() / s.len() as f32;
-        let (first, last) = (mean(&m[..5], |x| x.loss), mean(&m[25..], |x| x.loss));
+        let (first, last) = (
+            mean(&m[..5], |x| x.loss),
+            mean(&m[STEPS as usize - 5..], |x| x.loss),
+        );
         assert!(last < first - 0.05, "{model}: loss {first} -> {last}");
         // Not only σ shrinking: the predicted frames get closer to the targets.
         let (first, last) = (
             mean(&m[..5], |x| x.image_mse),
-            mean(&m[25..], |x| x.image_mse),
+            mean(&m[STEPS as usize - 5..], |x| x.image_mse),
         );
         assert!(last < 0.95 * first, "{model}: image MSE {first} -> {last}");
     }

@@ -1,3 +1,4 @@
+use super::joint_noise::joint_noise;
 use super::task::TaskSteps;
 use super::{ImitateError, Task};
 use crate::data::{Sequence, JOINTS};
@@ -115,6 +116,39 @@ pub fn mean_motion(
         },
         rows,
     )?))
+}
+
+/// The demonstration's recorded joints with smooth noise of RMSE `rmse` radians ([`joint_noise`],
+/// drawn from `seed`) on the arm joints from the task's first predicted step on, performed:
+/// how much error of a model's kind the action tolerates. `Ok(None)` when the demonstration is
+/// too short for the task.
+pub fn with_noise(
+    demo: &Sequence,
+    action: Action,
+    task: Task,
+    observations: usize,
+    rmse: f32,
+    seed: u64,
+) -> Result<Option<Imitation>, ImitateError> {
+    let Some(steps) = task.steps(demo.len(), observations) else {
+        return Ok(None);
+    };
+    let from = steps.predicted_from;
+    let noise = joint_noise(demo.len() - from, rmse, seed);
+    let rows = demo.joints[from..]
+        .iter()
+        .zip(noise)
+        .map(|(row, noise)| {
+            let mut row = *row;
+            row.iter_mut().zip(noise).for_each(|(v, n)| *v += n);
+            row
+        })
+        .collect();
+    let steps = TaskSteps {
+        observed: Vec::new(),
+        ..steps
+    };
+    Ok(Some(act(demo, action, steps, rows)?))
 }
 
 /// Performs the demonstration's recorded rows before `steps.predicted_from`, then `rows`,

@@ -6,11 +6,13 @@
 //! replayed. One implementation natively (`dmbn imitate`) and in wasm (`Model.imitate`).
 mod error;
 mod imitation;
+mod joint_noise;
 mod report;
 mod task;
 
 pub use error::ImitateError;
-pub use imitation::{enact, imitate, mean_motion, replay, Imitation};
+pub use imitation::{enact, imitate, mean_motion, replay, with_noise, Imitation};
+pub use joint_noise::joint_noise;
 pub use report::{ImitationReport, ImitationRow, OutcomeSums, PushMisses};
 pub use task::Task;
 pub use task::TaskSteps;

@@ -4,4 +4,4 @@
 
 /// `episode(Action::Grasp, 7, 64)?.digest()`.
 pub const GOLDEN_GRASP_SEED7_64: &str =
-    "ec2591e28c641877c9137eea8822b8d4651c90809da963e137719bf6d635f4af";
+    "c6cdc56a25998c41b9e7a021c3621c76d666d3495210a1c474b9659a26f891ab";

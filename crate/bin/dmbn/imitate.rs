@@ -9,7 +9,7 @@ use serde::Serialize;
 
 use dmbn::data::{Dataset, Sequence, SequenceRef};
 use dmbn::imitate::{
-    imitate, mean_motion, replay, ImitateError, ImitationReport, OutcomeSums, Task,
+    imitate, mean_motion, replay, with_noise, ImitateError, ImitationReport, OutcomeSums, Task,
 };
 use dmbn::predict::Predictor;
 use dmbn::quality::MeanMotion;
@@ -57,6 +57,10 @@ pub struct ImitateArgs {
     /// imitated ones).
     #[arg(long, value_parser = parse_ids)]
     mean_ids: Option<(u32, u32)>,
+    /// Also perform the recorded joints with smooth noise of this RMSE (radians; repeat for
+    /// more rows): how much error of a model's kind each action tolerates.
+    #[arg(long = "noise", value_parser = parse_noise)]
+    noise: Vec<f32>,
     /// Write the reports as JSON here (a list, one per task, with every performance's outcome).
     #[arg(long)]
     json: Option<PathBuf>,
@@ -80,6 +84,14 @@ struct TaskJson {
 
 const CEILING: &str = "ceiling: recorded joints";
 const FLOOR: &str = "floor: mean motion";
+
+/// `--noise`: a finite RMSE in radians, 0 to 1.
+fn parse_noise(s: &str) -> Result<f32, String> {
+    match s.parse::<f32>() {
+        Ok(v) if (0.0..=1.0).contains(&v) => Ok(v),
+        _ => Err(format!("\"{s}\": expected a joint RMSE in radians, 0 to 1")),
+    }
+}
 
 pub fn run(args: ImitateArgs) -> Result<(), CliError> {
     let predictors = args
@@ -133,19 +145,24 @@ pub fn run(args: ImitateArgs) -> Result<(), CliError> {
         TaskArg::All => Task::ALL.to_vec(),
     };
     let k = args.observations as usize;
-    // Rows: the ceiling, the floor, then the models in order.
-    let row_name = |r: usize| match r {
-        0 => CEILING,
-        1 => FLOOR,
-        _ => predictors[r - 2].0.as_str(),
-    };
+    // Rows: the ceiling, the floor, the noisy replays, then the models in order.
+    let names: Vec<String> = [CEILING.to_string(), FLOOR.to_string()]
+        .into_iter()
+        .chain(
+            args.noise
+                .iter()
+                .map(|n| format!("recorded joints + {n} rad noise")),
+        )
+        .chain(predictors.iter().map(|(name, _)| name.clone()))
+        .collect();
+    let row_name = |r: usize| names[r].as_str();
     let mut out = Vec::new();
     for task in tasks {
         let blend = args.blend.unwrap_or(task.default_blend());
         // Per action, per row (ceiling, floor, models in order).
         let mut sums: BTreeMap<Action, Vec<OutcomeSums>> = BTreeMap::new();
         let mut performances = Vec::new();
-        let rows = predictors.len() + 2;
+        let rows = names.len();
         let bar = progress(demos.len() * rows, &format!("{task}"));
         for (i, (id, action, demo)) in demos.iter().enumerate() {
             // Which demonstration failed, for a message that names it.
@@ -154,7 +171,11 @@ pub fn run(args: ImitateArgs) -> Result<(), CliError> {
             };
             let mut performed = vec![Some(replay(demo, *action).map_err(named)?)];
             performed.push(mean_motion(demo, *action, task, k, &mean).map_err(named)?);
-            bar.inc(2);
+            for &rmse in &args.noise {
+                let seed = u64::from(*id);
+                performed.push(with_noise(demo, *action, task, k, rmse, seed).map_err(named)?);
+            }
+            bar.inc(2 + args.noise.len() as u64);
             for (_, p) in &predictors {
                 let demo = &by_size[&p.model().image_size()][i].2;
                 performed.push(imitate(p, demo, *action, task, k, blend).map_err(named)?);
