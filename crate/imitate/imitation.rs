@@ -94,28 +94,18 @@ pub fn mean_motion(
     observations: usize,
     mean: &MeanMotion,
 ) -> Result<Option<Imitation>, ImitateError> {
-    let Some(steps) = task.steps(demo.len(), observations) else {
-        return Ok(None);
-    };
-    let rows = demo.times()[steps.predicted_from..]
-        .iter()
-        .map(|&phase| {
-            mean.at(action.name(), phase).map(|(_, joints)| joints).ok_or_else(|| {
-                ImitateError::Invalid(format!(
-                    "the mean motion has no {action} sequence: fit it on sequences of every action imitated"
-                ))
+    unobserved(demo, action, task, observations, |from| {
+        demo.times()[from..]
+            .iter()
+            .map(|&phase| {
+                mean.at(action.name(), phase).map(|(_, joints)| joints).ok_or_else(|| {
+                    ImitateError::Invalid(format!(
+                        "the mean motion has no {action} sequence: fit it on sequences of every action imitated"
+                    ))
+                })
             })
-        })
-        .collect::<Result<Vec<_>, _>>()?;
-    Ok(Some(act(
-        demo,
-        action,
-        TaskSteps {
-            observed: Vec::new(),
-            ..steps
-        },
-        rows,
-    )?))
+            .collect()
+    })
 }
 
 /// The demonstration's recorded joints with smooth noise of RMSE `rmse` radians ([`joint_noise`],
@@ -130,20 +120,34 @@ pub fn with_noise(
     rmse: f32,
     seed: u64,
 ) -> Result<Option<Imitation>, ImitateError> {
+    unobserved(demo, action, task, observations, |from| {
+        let noise = joint_noise(demo.len() - from, rmse, seed);
+        Ok(demo.joints[from..]
+            .iter()
+            .zip(noise)
+            .map(|(row, noise)| {
+                let mut row = *row;
+                row.iter_mut().zip(noise).for_each(|(v, n)| *v += n);
+                row
+            })
+            .collect())
+    })
+}
+
+/// A trajectory that observed nothing (the floor, the noisy replays) performed for `task`: the
+/// recorded rows before the task's first predicted step, then `rows(that step)`. `Ok(None)`
+/// when the demonstration is too short for the task.
+fn unobserved(
+    demo: &Sequence,
+    action: Action,
+    task: Task,
+    observations: usize,
+    rows: impl FnOnce(usize) -> Result<Vec<[f32; JOINTS]>, ImitateError>,
+) -> Result<Option<Imitation>, ImitateError> {
     let Some(steps) = task.steps(demo.len(), observations) else {
         return Ok(None);
     };
-    let from = steps.predicted_from;
-    let noise = joint_noise(demo.len() - from, rmse, seed);
-    let rows = demo.joints[from..]
-        .iter()
-        .zip(noise)
-        .map(|(row, noise)| {
-            let mut row = *row;
-            row.iter_mut().zip(noise).for_each(|(v, n)| *v += n);
-            row
-        })
-        .collect();
+    let rows = rows(steps.predicted_from)?;
     let steps = TaskSteps {
         observed: Vec::new(),
         ..steps

@@ -159,7 +159,7 @@ pub fn run(args: ImitateArgs) -> Result<(), CliError> {
     let mut out = Vec::new();
     for task in tasks {
         let blend = args.blend.unwrap_or(task.default_blend());
-        // Per action, per row (ceiling, floor, models in order).
+        // Per action, per row (in `names`' order).
         let mut sums: BTreeMap<Action, Vec<OutcomeSums>> = BTreeMap::new();
         let mut performances = Vec::new();
         let rows = names.len();
