@@ -16,6 +16,7 @@ mod push_error;
 mod push_miss;
 mod render;
 mod scene;
+mod script;
 mod simulator;
 mod trajectory;
 
@@ -31,5 +32,6 @@ pub use push_error::PushError;
 pub use push_miss::PushMiss;
 pub use render::{Camera, Primitive, Renderer, Shape};
 pub use scene::{Scene, OBJECT_HALF_HEIGHT, OBJECT_RADIUS, SUBSTEPS};
+pub use script::{Script, Segment};
 pub use simulator::{episode, perform, Simulator};
 pub use trajectory::Trajectory;

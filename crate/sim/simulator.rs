@@ -8,6 +8,7 @@ use super::arm::ARM_JOINTS;
 use super::plan::Plan;
 use super::render::{Primitive, Renderer};
 use super::scene::{Scene, CAMERA, DT, SUBSTEPS, TABLE};
+use super::script::Script;
 use super::{Action, SimError, Trajectory};
 
 /// A running episode: physics scene, scripted plan and renderer.
@@ -32,11 +33,17 @@ impl Simulator {
 
     /// An episode of `action` with the object placed from `seed`; frames `image_size` (64 or 128).
     pub fn new(action: Action, seed: u64, image_size: u32) -> Result<Self, SimError> {
+        let [x, y] = Self::placement(seed);
+        Self::with_object(action, x, y, seed, image_size)
+    }
+
+    /// Where `new(_, seed, _)` places the object (x, y on the table).
+    pub fn placement(seed: u64) -> [f32; 2] {
         let mut rng = Pcg64::seed_from_u64(seed);
         let (rx, ry) = Self::REGION;
         let x = rng.random_range(rx[0]..=rx[1]);
         let y = rng.random_range(ry[0]..=ry[1]);
-        Self::with_object(action, x, y, seed, image_size)
+        [x, y]
     }
 
     /// An episode with the object at `(x, y)` on the table; `seed` still varies the timing
@@ -48,9 +55,17 @@ impl Simulator {
         seed: u64,
         image_size: u32,
     ) -> Result<Self, SimError> {
+        let (script, durations) = Self::script(action, [x, y], seed);
+        Self::with_plan(script.plan(&durations), x, y, image_size)
+    }
+
+    /// The script and the segments' durations that `with_object(action, object, seed)`
+    /// performs: the free parameters drawn first, then the durations.
+    pub fn script(action: Action, object: [f32; 2], seed: u64) -> (Script, Vec<usize>) {
         let mut rng = Pcg64::seed_from_u64(seed ^ PLAN_STREAM);
-        let plan = Plan::new(action, [x, y], &mut rng);
-        Self::with_plan(plan, x, y, image_size)
+        let script = Script::new(action, object, &mut rng);
+        let durations = script.draw_durations(&mut rng);
+        (script, durations)
     }
 
     /// The arm performing `trajectory` (see [`Plan::from_trajectory`]) with the object at

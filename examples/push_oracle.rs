@@ -1,0 +1,119 @@
+//! The best a mirror that performs *mean* joints could do from K evenly spaced glimpses of a
+//! scripted push, when the timing is all it cannot see.
+//!
+//! For each push demonstration (the simulator's seeds SEED..SEED+N, as `dmbn simulate --seed
+//! SEED` makes them) the script's free parameters (where the object is, the push's direction
+//! and distance) are given, its segments' durations are not: every combination of durations
+//! the script could draw is weighted by how well it puts the grasp point where the
+//! demonstration had it at the K observed phases (a Gaussian of SIGMA metres), and the
+//! weighted mean of their joint trajectories, at the demonstration's phases, is performed
+//! with the object in place: the posterior mean that a network trained with squared error
+//! approximates, given perfect reading of where the gripper is. The timing is then the only
+//! uncertainty: if the mean over the timings left open cut the push's corner, this would miss.
+//!
+//! ```sh
+//! cargo run --release --example push_oracle -- 300000 100 0.01 [K]
+//! ```
+use dmbn::sim::{episode, perform, Action, Outcome, PushMiss, Simulator, Trajectory};
+
+/// Combinations weighted below this (relative to the likeliest) are left out.
+const NEGLIGIBLE: f64 = 1e-4;
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let usage = "usage: push_oracle SEED N SIGMA_M [K]";
+    let arg = |i: usize| args.get(i).expect(usage);
+    let seed0: u64 = arg(1).parse().expect(usage);
+    let n: u64 = arg(2).parse().expect(usage);
+    let sigma: f64 = arg(3).parse().expect(usage);
+    let k: usize = args.get(4).map_or(5, |s| s.parse().expect(usage));
+    let (mut landed, mut misses, mut se, mut values) = (0, [0; 3], 0.0f64, 0usize);
+    for seed in seed0..seed0 + n {
+        let demo = episode(Action::Move, seed, 64).expect("a scripted push");
+        let object = Simulator::placement(seed);
+        let (script, truth) = Simulator::script(Action::Move, object, seed);
+        let len = demo.len();
+        let phases: Vec<f32> = (0..len).map(|t| t as f32 / (len - 1) as f32).collect();
+        let observed: Vec<f32> = (0..k)
+            .map(|i| {
+                (i as f64 * (len - 1) as f64 / (k - 1) as f64).round() as f32 / (len - 1) as f32
+            })
+            .collect();
+        let total = |d: &[usize]| d.iter().sum::<usize>() as f32;
+        let grasp_point = |d: &[usize], phase: f32| script.at(d, phase * total(d)).0.position;
+        let seen: Vec<_> = observed.iter().map(|&p| grasp_point(&truth, p)).collect();
+        // Every timing the script could draw, with its log-likelihood.
+        let mut timings = vec![(Vec::new(), 0.0f64)];
+        for segment in &script.segments {
+            timings = timings
+                .into_iter()
+                .flat_map(|(d, _)| {
+                    segment
+                        .steps
+                        .clone()
+                        .map(move |s| ([d.clone(), vec![s]].concat(), 0.0))
+                })
+                .collect();
+        }
+        for (d, ll) in timings.iter_mut() {
+            *ll = -observed
+                .iter()
+                .zip(&seen)
+                .map(|(&p, s)| (grasp_point(d, p) - *s).length_squared() as f64)
+                .sum::<f64>()
+                / (2.0 * sigma * sigma);
+        }
+        let best = timings.iter().map(|t| t.1).fold(f64::MIN, f64::max);
+        let weighted: Vec<_> = timings
+            .iter()
+            .map(|(d, ll)| (d, (ll - best).exp()))
+            .filter(|(_, w)| *w > NEGLIGIBLE)
+            .collect();
+        let z: f64 = weighted.iter().map(|(_, w)| w).sum();
+        let mut mean = vec![[0.0f64; 6]; len];
+        for (d, w) in &weighted {
+            let joints = script.plan(d).joints;
+            for (m, &phase) in mean.iter_mut().zip(&phases) {
+                let s = phase * (joints.len() - 1) as f32;
+                let i = (s as usize).min(joints.len() - 2);
+                let f = s - i as f32;
+                for (j, mj) in m.iter_mut().enumerate() {
+                    let q = joints[i][j] * (1.0 - f) + joints[i + 1][j] * f;
+                    *mj += w / z * q as f64;
+                }
+            }
+        }
+        let rows: Vec<[f32; 7]> = mean
+            .iter()
+            .map(|m| std::array::from_fn(|j| if j < 6 { m[j] as f32 } else { 0.0 }))
+            .collect();
+        for (r, t) in rows.iter().zip(&demo.joints) {
+            se += (0..6).map(|j| ((r[j] - t[j]) as f64).powi(2)).sum::<f64>();
+            values += 6;
+        }
+        let trajectory = Trajectory::new(rows).expect("finite joints within limits");
+        let performed = perform(&trajectory, object, 64).expect("the object is on the table");
+        let outcome = Outcome::judge(Action::Move, &performed, &demo).expect("non-empty");
+        match outcome.push_error_cm.map(|e| e.miss()) {
+            _ if outcome.success => landed += 1,
+            Some(PushMiss::Short) => misses[0] += 1,
+            Some(PushMiss::Long) => misses[1] += 1,
+            Some(PushMiss::Aside) | None => misses[2] += 1,
+        }
+        eprintln!(
+            "seed {seed}: {} of {} timings weigh, object {:.1} cm from the spot",
+            weighted.len(),
+            timings.len(),
+            outcome.object_error_cm
+        );
+    }
+    println!(
+        "seeds {seed0}..{}, {k} glimpses, σ {sigma} m: {landed}/{n} pushes landed, misses \
+         short / long / aside {} / {} / {}, joint RMSE {:.4} rad",
+        seed0 + n - 1,
+        misses[0],
+        misses[1],
+        misses[2],
+        (se / values.max(1) as f64).sqrt()
+    );
+}

@@ -1,0 +1,90 @@
+//! Where a model's frames-only pushes go wrong: the joint RMSE of its prediction by steps
+//! from the push's end (the step the demonstration's grasp point, at table height, is
+//! furthest along the push), and how far short of the demonstration's reach the performed
+//! grasp point stopped on the pushes it missed.
+//!
+//! ```sh
+//! cargo run --release --example push_reach -- assets/models/attn-sim.dmbn data/imitate [K]
+//! ```
+use dmbn::data::{Dataset, Sequence};
+use dmbn::imitate::{imitate, Task};
+use dmbn::predict::Predictor;
+use dmbn::sim::Action;
+
+/// Steps per bin, and the bins' span around the push's end.
+const BIN: i64 = 5;
+const FROM: i64 = -40;
+const TO: i64 = 20;
+
+/// Per step, how far the grasp point is along the demonstration's push (metres, from its
+/// start), or `None` while it is above table height (where it pushes nothing).
+fn reach(demo: &Sequence, episode: &Sequence) -> Vec<Option<f32>> {
+    let (start, end) = (demo.object[0], demo.object[demo.len() - 1]);
+    let push = [end[0] - start[0], end[1] - start[1]];
+    let length = push[0].hypot(push[1]);
+    let low = demo.endpoint.iter().map(|e| e[2]).fold(f32::MAX, f32::min) + 0.02;
+    episode
+        .endpoint
+        .iter()
+        .map(|e| {
+            (e[2] < low)
+                .then(|| ((e[0] - start[0]) * push[0] + (e[1] - start[1]) * push[1]) / length)
+        })
+        .collect()
+}
+
+fn furthest(reach: &[Option<f32>]) -> (usize, f32) {
+    reach
+        .iter()
+        .enumerate()
+        .filter_map(|(k, r)| r.map(|r| (k, r)))
+        .fold((0, f32::MIN), |a, b| if b.1 > a.1 { b } else { a })
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let usage = "usage: push_reach MODEL DATA [K]";
+    let predictor = Predictor::load(args.get(1).expect(usage)).expect("a model file");
+    let dataset = Dataset::open(args.get(2).expect(usage)).expect("a dataset");
+    let k: usize = args.get(3).map_or(5, |s| s.parse().expect(usage));
+    let bins = ((TO - FROM) / BIN) as usize;
+    let (mut se, mut values) = (vec![0.0f64; bins], vec![0usize; bins]);
+    let mut short = Vec::new();
+    for r in dataset
+        .sequences()
+        .iter()
+        .filter(|r| r.action == Action::Move.name())
+    {
+        let size = predictor.model().image_size() as u32;
+        let demo = dataset.read(r, Some(size)).expect("a readable sequence");
+        let Some(done) =
+            imitate(&predictor, &demo, Action::Move, Task::Frames, k, 1.0).expect("a prediction")
+        else {
+            continue;
+        };
+        let (end, demo_reach) = furthest(&reach(&demo, &demo));
+        for (t, (p, d)) in done.trajectory.iter().zip(&demo.joints).enumerate() {
+            let b = t as i64 - end as i64 - FROM;
+            if (0..TO - FROM).contains(&b) {
+                se[(b / BIN) as usize] +=
+                    (0..6).map(|j| ((p[j] - d[j]) as f64).powi(2)).sum::<f64>();
+                values[(b / BIN) as usize] += 6;
+            }
+        }
+        if !done.outcome.success {
+            let performed = furthest(&reach(&demo, &done.performance)).1;
+            let phase = end as f32 / (demo.len() - 1) as f32;
+            short.push((r.id, demo_reach - performed, phase));
+        }
+    }
+    println!("| steps from the push's end | joint RMSE (rad) |\n|---|---:|");
+    for b in 0..bins {
+        let from = FROM + b as i64 * BIN;
+        let rmse = (se[b] / values[b].max(1) as f64).sqrt();
+        println!("| {from:+} to {:+} | {rmse:.3} |", from + BIN - 1);
+    }
+    println!("\nmissed pushes: id, how far short of the demonstration's reach the grasp point stopped (cm), the push's end (phase)");
+    for (id, cm, phase) in short {
+        println!("{id}: {:.1} cm, {phase:.2}", cm * 100.0);
+    }
+}
