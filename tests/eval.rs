@@ -5,6 +5,7 @@
 mod support;
 
 use std::process::Command;
+use std::sync::{Mutex, MutexGuard};
 
 use burn::tensor::Device;
 use dmbn::data::Normalization;
@@ -16,6 +17,16 @@ use dmbn::model::{ModelConfig, ModelKind};
 use dmbn::sim::Action;
 use rand::{RngExt, SeedableRng};
 use rand_pcg::Pcg64;
+
+/// burn draws weights from one generator shared by every thread, so a head fitted (or a
+/// model drawn) while another test draws is not the seed's alone: the tests that draw
+/// in-process take turns (the probe itself fits its heads one after another).
+fn burn_generator() -> MutexGuard<'static, ()> {
+    static GENERATOR: Mutex<()> = Mutex::new(());
+    GENERATOR
+        .lock()
+        .unwrap_or_else(|poisoned| poisoned.into_inner())
+}
 
 /// `k` encodings of width 8 at uniform random times; `with_time` puts t (and t²) in them.
 fn synthetic(k: usize, with_time: bool, seed: u64) -> StepEncodings {
@@ -41,6 +52,7 @@ fn synthetic(k: usize, with_time: bool, seed: u64) -> StepEncodings {
 
 #[test]
 fn the_probe_head_reads_time_when_it_is_there_and_not_otherwise() {
+    let _generator = burn_generator();
     let head = HeadConfig::new().with_steps(600);
     let with = fit_head(
         &synthetic(2000, true, 1),
@@ -76,6 +88,7 @@ fn with_feature(mut e: StepEncodings, j: usize, value: impl Fn(usize) -> f32) ->
 
 #[test]
 fn a_feature_constant_on_the_training_steps_cannot_blow_the_probe_up() {
+    let _generator = burn_generator();
     let head = HeadConfig::new().with_steps(400);
     let test_var = time_variance(&synthetic(500, true, 2).times);
     // Near-constant on the training steps (a 1e-5 jitter: its std, ~1e-5, was the divisor)
@@ -224,6 +237,7 @@ fn dmbn(args: &[&str]) -> std::process::Output {
 
 #[test]
 fn dmbn_eval_and_probe_run_end_to_end() {
+    let _generator = burn_generator();
     let tmp = tempfile::tempdir().unwrap();
     let data = tmp.path().join("data");
     support::simulated_dataset(&data, 0..3, &[Action::Grasp], 20);
@@ -439,6 +453,7 @@ fn write_dataset(root: &std::path::Path, ids: &[u32]) {
 
 #[test]
 fn dmbn_probe_tests_on_an_id_range_or_a_second_dataset() {
+    let _generator = burn_generator();
     let tmp = tempfile::tempdir().unwrap();
     let (data, other) = (tmp.path().join("data"), tmp.path().join("other"));
     write_dataset(&data, &[0, 1, 2, 3]);

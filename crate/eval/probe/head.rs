@@ -46,7 +46,8 @@ impl Head {
 /// Fits a head that regresses the time from `train` encodings (features standardised with the
 /// training statistics, robustly: see [`crate::eval::REL_STD_FLOOR`] and [`crate::eval::STANDARD_CLIP`])
 /// and returns its mean squared error on `test`. `image` picks the image or the joint
-/// encodings. Deterministic for a seed; NaN when either set is empty or the widths differ.
+/// encodings. Deterministic for a seed while no other thread draws weights (burn's generator
+/// is shared by every thread); NaN when either set is empty or the widths differ.
 pub fn fit_head(
     train: &StepEncodings,
     test: &StepEncodings,
