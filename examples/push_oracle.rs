@@ -14,6 +14,8 @@
 //! ```sh
 //! cargo run --release --example push_oracle -- 300000 100 0.01 [K]
 //! ```
+use dmbn::data::Sequence;
+use dmbn::quality::Scenario;
 use dmbn::sim::{episode, perform, Action, Outcome, PushMiss, Simulator, Trajectory};
 
 /// Combinations weighted below this (relative to the likeliest) are left out.
@@ -33,11 +35,14 @@ fn main() {
         let object = Simulator::placement(seed);
         let (script, truth) = Simulator::script(Action::Move, object, seed);
         let len = demo.len();
-        let phases: Vec<f32> = (0..len).map(|t| t as f32 / (len - 1) as f32).collect();
-        let observed: Vec<f32> = (0..k)
-            .map(|i| {
-                (i as f64 * (len - 1) as f64 / (k - 1) as f64).round() as f32 / (len - 1) as f32
-            })
+        let phases = demo.times();
+        // The phases of the steps `dmbn imitate --task frames` observes.
+        let observed: Vec<f32> = Scenario::Interp
+            .steps(len, k)
+            .expect("a demonstration longer than K steps")
+            .observed
+            .iter()
+            .map(|&s| Sequence::phase(s, len))
             .collect();
         let total = |d: &[usize]| d.iter().sum::<usize>() as f32;
         let grasp_point = |d: &[usize], phase: f32| script.at(d, phase * total(d)).0.position;
