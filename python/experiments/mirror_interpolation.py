@@ -69,10 +69,37 @@ class Interpolator(torch.nn.Module):
         return start + self.net(x / scale)
 
 
-def noisy(contexts, noise, generator):
-    n = torch.randn(contexts.shape, generator=generator) * noise
-    n[..., 6] = 0  # the gripper column (metres of finger travel) is read as it is
+def noisy(contexts, noise, gripper_noise, generator):
+    """Gaussian noise of `noise` rad on the six arm joints and of `gripper_noise` on the
+    gripper column (metres of finger travel: a push's column is 0 throughout, so a model's read
+    of about a millimetre lies far outside what an interpolator of true columns has seen)."""
+    n = torch.randn(contexts.shape, generator=generator)
+    n[..., :6] *= noise
+    n[..., 6] *= gripper_noise
     return contexts + n
+
+
+def fit(net, loss, size, steps, generator):
+    """Adam (1e-3, cosine schedule) on `loss(indices)` of random batches of 512 of `size`
+    examples."""
+    opt = torch.optim.Adam(net.parameters(), 1e-3)
+    schedule = torch.optim.lr_scheduler.CosineAnnealingLR(opt, steps)
+    for step in range(steps):
+        value = loss(torch.randint(0, size, (512,), generator=generator))
+        opt.zero_grad()
+        value.backward()
+        opt.step()
+        schedule.step()
+        if step % 5000 == 0 or step == steps - 1:
+            print(f"step {step}: training RMSE {value.item() ** 0.5:.4f}", flush=True)
+
+
+def write(out, i, action, pred, truth):
+    """Writes a predicted trajectory as its joint file; returns its squared error on the six
+    arm joints and how many values that sums."""
+    os.makedirs(f"{out}/{i}/{action}", exist_ok=True)
+    np.savetxt(f"{out}/{i}/{action}/joint_{i}.txt", pred)
+    return float(((pred - truth)[:, :6] ** 2).sum()), pred[:, :6].size
 
 
 def main():
@@ -82,6 +109,7 @@ def main():
     p.add_argument("--test", required=True)
     p.add_argument("--test-ids", default="0-99")
     p.add_argument("--noise", type=float, default=0.0)
+    p.add_argument("--gripper-noise", type=float, default=0.0)
     p.add_argument("--read-train", help="the joints a model read from the training frames "
                    "(`cargo run --release --example read_joints`), instead of the true ones")
     p.add_argument("--read-test", help="... and from the test frames")
@@ -97,28 +125,17 @@ def main():
     inputs = K * 7 + 7 + features.shape[1]
     scale = torch.cat([contexts.flatten(1), truth, features], 1).abs().amax(0).clamp(min=1e-3)
     net = Interpolator(inputs, a.width)
-    opt = torch.optim.Adam(net.parameters(), 1e-3)
-    schedule = torch.optim.lr_scheduler.CosineAnnealingLR(opt, a.steps)
-    for step in range(a.steps):
-        i = torch.randint(0, len(truth), (512,), generator=rng)
-        pred = net(noisy(contexts[i], a.noise, rng), weights[i], features[i], scale)
-        loss = ((pred - truth[i]) ** 2).mean()
-        opt.zero_grad()
-        loss.backward()
-        opt.step()
-        schedule.step()
-        if step % 5000 == 0 or step == a.steps - 1:
-            print(f"step {step}: training RMSE {loss.item() ** 0.5:.4f}", flush=True)
+    fit(net, lambda i: ((net(noisy(contexts[i], a.noise, a.gripper_noise, rng), weights[i],
+                             features[i], scale) - truth[i]) ** 2).mean(), len(truth), a.steps, rng)
     for action, flag in (("move", 1.0), ("grasp", 0.0)):
         se, n = 0.0, 0
         for i in span(a.test_ids):
             c, w, f, y = (torch.tensor(v) for v in examples(joints(a.test, i, action), flag, read_joints(a.read_test, i, action)))
+            # A model's reads are tested as read; true joints with the training's noise.
+            observed = c[:1] if a.read_test else noisy(c[:1], a.noise, a.gripper_noise, rng)
             with torch.no_grad():
-                pred = net(noisy(c[:1], a.noise, rng).expand_as(c), w, f, scale).numpy()
-            se += float(((pred - y.numpy())[:, :6] ** 2).sum())
-            n += pred[:, :6].size
-            os.makedirs(f"{a.out}/{i}/{action}", exist_ok=True)
-            np.savetxt(f"{a.out}/{i}/{action}/joint_{i}.txt", pred)
+                pred = net(observed.expand_as(c), w, f, scale).numpy()
+            se, n = np.add((se, n), write(a.out, i, action, pred, y.numpy()))
         print(f"{action}: joint RMSE {(se / n) ** 0.5:.4f} rad on {a.test}")
 
 
