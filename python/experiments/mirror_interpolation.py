@@ -94,6 +94,19 @@ def fit(net, loss, size, steps, generator):
             print(f"step {step}: training RMSE {value.item() ** 0.5:.4f}", flush=True)
 
 
+def fit_correction(x, start, truth, steps):
+    """An MLP (3 x 256) fitted to correct `start` to `truth` from the features `x` (per-sequence
+    arrays, one row a step); returns it with the scale its inputs are divided by."""
+    x, start, truth = (torch.tensor(np.concatenate(v)) for v in (x, start, truth))
+    scale = x.abs().amax(0).clamp(min=1e-3)
+    net = torch.nn.Sequential(
+        torch.nn.Linear(x.shape[1], 256), torch.nn.GELU(), torch.nn.Linear(256, 256), torch.nn.GELU(),
+        torch.nn.Linear(256, 256), torch.nn.GELU(), torch.nn.Linear(256, 7))
+    fit(net, lambda i: ((start[i] + net(x[i] / scale) - truth[i]) ** 2).mean(), len(x), steps,
+        torch.Generator().manual_seed(1))
+    return net, scale
+
+
 def write(out, i, action, pred, truth):
     """Writes a predicted trajectory as its joint file; returns its squared error on the six
     arm joints and how many values that sums."""

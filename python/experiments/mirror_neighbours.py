@@ -20,7 +20,7 @@ import argparse
 import numpy as np
 import torch
 
-from mirror_interpolation import FREQUENCIES, fit, joints, write
+from mirror_interpolation import FREQUENCIES, fit_correction, joints, write
 
 
 def evenly_spaced(t, k):
@@ -83,13 +83,7 @@ def main():
             for steps, observed in layouts:
                 xs, s = examples(steps, observed, t, flag)
                 x.append(xs), start.append(s), truth.append(y)
-    x, start, truth = (torch.tensor(np.concatenate(v)) for v in (x, start, truth))
-    scale = x.abs().amax(0).clamp(min=1e-3)
-    net = torch.nn.Sequential(
-        torch.nn.Linear(x.shape[1], 256), torch.nn.GELU(), torch.nn.Linear(256, 256), torch.nn.GELU(),
-        torch.nn.Linear(256, 256), torch.nn.GELU(), torch.nn.Linear(256, 7))
-    fit(net, lambda i: ((start[i] + net(x[i] / scale) - truth[i]) ** 2).mean(), len(x), a.steps,
-        torch.Generator().manual_seed(1))
+    net, scale = fit_correction(x, start, truth, a.steps)
     for action, flag in (("move", 1.0), ("grasp", 0.0)):
         se, n = 0.0, 0
         for i in span(a.test_ids):
