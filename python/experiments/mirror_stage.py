@@ -45,8 +45,9 @@ def main():
     p.add_argument("--train", required=True, help="the dataset the layouts were read from")
     p.add_argument("--layouts", required=True, help="read_layouts' JSON lines")
     p.add_argument("--test", nargs=3, action="append", required=True, metavar=("DATA", "READS", "OUT"),
-                   help="a dataset, the reads at its 5 evenly spaced steps, where to write (ids 0-99)")
+                   help="a dataset, the reads at its evenly spaced steps, where to write (ids 0-99)")
     p.add_argument("--no-action", action="store_true", help="not told whether it is a push")
+    p.add_argument("--observations", type=int, default=5, help="glimpses the test reads are at, evenly spaced")
     p.add_argument("--steps", type=int, default=20000)
     a = p.parse_args()
     torch.manual_seed(0)
@@ -68,7 +69,8 @@ def main():
             for i in range(100):
                 y = joints(data, i, name)
                 t = len(y)
-                steps = [round(j * (t - 1) / 4) for j in range(5)]
+                k = a.observations
+                steps = [round(j * (t - 1) / (k - 1)) for j in range(k)]
                 xs, s = examples(steps, joints(reads, i, name), t, action(name))
                 with torch.no_grad():
                     pred = (torch.tensor(s) + net(torch.tensor(xs) / scale)).numpy()
