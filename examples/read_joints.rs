@@ -1,12 +1,12 @@
-//! The joints a model reads from K evenly spaced frames alone (blend 1): its joint means at
-//! the observed steps, K rows per sequence written as its joint file in the DMBN layout
+//! The joints a model's network reads from K evenly spaced frames alone (blend 1; its mirror
+//! stage, if any, left out): its joint means at the observed steps, K rows per sequence written as its joint file in the DMBN layout
 //! (`OUT/<id>/<action>/joint_<id>.txt`), for `python/experiments/mirror_interpolation.py
 //! --read-train/--read-test` to interpolate.
 //!
 //! ```sh
 //! cargo run --release --example read_joints -- assets/models/attn-sim.dmbn data/imitate 0-99 runs/read
 //! ```
-use dmbn::data::{Dataset, Sequence};
+use dmbn::data::Dataset;
 use dmbn::predict::{Observations, Predictor};
 use dmbn::quality::Scenario;
 
@@ -32,13 +32,7 @@ fn main() -> Result<(), String> {
             .ok_or("a sequence too short")?
             .observed;
         let observed = Observations::from_sequence(&seq, &steps).map_err(|e| e.to_string())?;
-        let times: Vec<f32> = steps
-            .iter()
-            .map(|&s| Sequence::phase(s, seq.len()))
-            .collect();
-        let read = predictor
-            .predict_joints(&observed, &times, 1.0)
-            .map_err(|e| e.to_string())?;
+        let read = predictor.reads(&observed).map_err(|e| e.to_string())?;
         let text: String = read
             .iter()
             .map(|row| row.map(|v| v.to_string()).join(" ") + "\n")

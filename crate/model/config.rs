@@ -96,6 +96,10 @@ pub struct ModelConfig {
     /// the joint decoder starts from those, interpolated as observed joints would be, instead
     /// of from nothing. Absent (older files) or false: it starts from nothing.
     pub frame_joints: Option<bool>,
+    /// Width of the mirror stage ([`super::Mirror`]): the file holds one, which gives the
+    /// joints wherever the observations are frames only (blend 1). Absent (older files, or
+    /// none fitted): the network's own joints.
+    pub mirror: Option<usize>,
 }
 
 impl ModelConfig {
@@ -110,6 +114,12 @@ impl ModelConfig {
             return Err(frame_joints_refused(self.kind));
         }
 
+        if self.mirror == Some(0) {
+            return Err(ModelError::config(
+                "mirror",
+                "is 0: expected the width of the mirror stage's layers (at least 1), or none",
+            ));
+        }
         if self.kind == ModelKind::Attn {
             check_heads(self.attention_heads(), self.hidden)?;
         }

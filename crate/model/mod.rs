@@ -33,6 +33,8 @@ mod joint_sigma_scale;
 mod kernels;
 mod loss;
 mod maps;
+mod mirror;
+mod mirror_inputs;
 #[allow(clippy::module_inception)]
 mod model;
 mod prediction;
@@ -69,6 +71,8 @@ pub use joint_decoder::{JointDecoder, JointDecoderConfig};
 pub use joint_encoder::{JointEncoder, JointEncoderConfig};
 pub use joint_sigma_scale::JointSigmaScale;
 pub use loss::{gaussian_loss, joint_nll, Loss, LossValues};
+pub use mirror::{Mirror, MirrorConfig, MIRROR_LAYERS, MIRROR_SIGMA_FLOOR};
+pub use mirror_inputs::{mirror_inputs, MIRROR_FREQUENCIES, MIRROR_INPUTS, MIRROR_SLOTS};
 pub use model::{Model, Network};
 pub use prediction::{AttentiveContexts, ContextEncodings, Prediction, Representation};
 #[cfg(not(target_arch = "wasm32"))]

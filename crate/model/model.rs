@@ -6,8 +6,8 @@ use super::dmbn_attn::DmbnAttn;
 use super::dmbn_pte::DmbnPte;
 use super::loss::{gaussian_loss, Loss};
 use super::{
-    BatchTensors, ContextEncodings, Decoder, EncodedContexts, ImageEncoder, ModelConfig,
-    ModelError, ModelKind, Prediction, Representation, Start,
+    BatchTensors, ContextEncodings, Decoder, EncodedContexts, ImageEncoder, Mirror, MirrorConfig,
+    ModelConfig, ModelError, ModelKind, Prediction, Representation, Start,
 };
 
 /// One of the three networks.
@@ -30,6 +30,8 @@ pub enum Network {
 pub struct Model {
     /// The network's weights.
     pub network: Network,
+    /// The mirror stage, where the file has one (`ModelConfig::mirror`).
+    pub mirror: Option<Mirror>,
     /// What built it (kind, sizes, σ floor, loss weight).
     #[module(skip)]
     config: ModelConfig,
@@ -46,6 +48,9 @@ impl ModelConfig {
         };
         Ok(Model {
             network,
+            mirror: self
+                .mirror
+                .map(|width| MirrorConfig::new().with_width(width).init(device)),
             config: self.clone(),
         })
     }
@@ -64,9 +69,30 @@ impl Model {
         match self.network {
             Network::Attn(net) => Ok(Model {
                 network: Network::Attn(net.reading_frame_joints(device)),
+                mirror: self.mirror,
                 config: self.config.with_frame_joints(Some(true)),
             }),
             _ => Err(super::config::frame_joints_refused(self.config.kind)),
+        }
+    }
+
+    /// The model with `mirror` as its mirror stage (replacing any it had).
+    pub fn with_mirror(self, mirror: Mirror) -> Model {
+        let width = mirror.width();
+        Model {
+            network: self.network,
+            mirror: Some(mirror),
+            config: self.config.with_mirror(Some(width)),
+        }
+    }
+
+    /// The model without a mirror stage (its network changes: the stage learnt the old one's
+    /// reads).
+    pub fn without_mirror(self) -> Model {
+        Model {
+            network: self.network,
+            mirror: None,
+            config: self.config.with_mirror(None),
         }
     }
 

@@ -4,7 +4,8 @@
 //! hyperparameters, image size, joint normalisation) as the metadata entry `dmbn`.
 //!
 //! Names are the model's module paths without the `network` prefix and the variant
-//! (`decoder.shared.weight`, `image_attention.query.bias` …); burn-store's PyTorch adapters
+//! (`decoder.shared.weight`, `image_attention.query.bias` …; the mirror stage's
+//! `mirror.layers.0.weight` …); burn-store's PyTorch adapters
 //! transpose the Linear weights and rename LayerNorm's gamma/beta. Export and import go
 //! through the model file's bytes, so what is imported runs wherever a model file does.
 use std::collections::HashMap;
@@ -91,7 +92,11 @@ pub fn import_safetensors(bytes: &[u8], half: bool) -> Result<Vec<u8>, ModelErro
     check_tensors(&file, &expected_tensors(&model), &header.config)?;
     let mut store = SafetensorsStore::from_bytes(Some(bytes.to_vec()))
         .skip_enum_variants(true)
-        .remap(remapper("^", "network."))
+        .remap(
+            remapper("^", "network.")
+                .add_pattern("^network\\.mirror\\.", "mirror.")
+                .expect("a valid constant pattern"),
+        )
         .with_from_adapter(PyTorchToBurnAdapter.chain(FloatCastAdapter::to(DType::F32)))
         .validate(false)
         .allow_partial(true);

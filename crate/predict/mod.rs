@@ -16,7 +16,7 @@ mod sequence_prediction;
 
 #[cfg(not(target_arch = "wasm32"))]
 pub use arrays::prediction_arrays;
-pub use encoding::Encoding;
+pub use encoding::{Encoding, Reads};
 pub use heat_map::{heat_map, heat_map_rgb, pixel_sigma};
 pub use observations::Observations;
 pub use predictor::Predictor;

@@ -1,10 +1,11 @@
 use burn::tensor::{Device, Tensor, TensorData};
 
-use super::{Encoding, Observations, SequencePrediction};
+use super::{Encoding, Observations, Reads, SequencePrediction};
 use crate::augment::Batch;
 use crate::data::JOINTS;
 use crate::model::{
     self, tensors, EncodedContexts, JointSigmaScale, Model, ModelError, ModelKind, Normalization,
+    Representation,
 };
 
 /// A trained model ready for inference on the CPU (flex backend): encode observations once,
@@ -122,16 +123,30 @@ impl Predictor {
             model::values(contexts.times().clone()),
             model::values(contexts.mask().clone()),
         );
-        let span = times
+        let observed: Vec<f32> = times
             .iter()
             .zip(&mask)
             .filter(|(_, &m)| m > 0.0)
-            .fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), (&t, _)| {
+            .map(|(&t, _)| t)
+            .collect();
+        let span = observed
+            .iter()
+            .fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), &t| {
                 (lo.min(t), hi.max(t))
             });
+        let representation = self.model.represent(contexts, c)?;
+        // The mirror stage answers for frames only, from what the network reads there.
+        let reads = match &self.model.mirror {
+            Some(_) if blend == 1.0 && !observed.is_empty() => Some(Reads {
+                joints: self.network_joints(&representation, &observed)?,
+                times: observed,
+            }),
+            _ => None,
+        };
         Ok(Encoding {
-            representation: self.model.represent(contexts, c)?,
+            representation,
             span,
+            reads,
         })
     }
 
@@ -153,16 +168,44 @@ impl Predictor {
                 let scale = self.joint_sigma_scale.at(t, encoding.span);
                 row.iter_mut().for_each(|s| *s *= scale);
             }
+            let mut joint_mean = model::values(p.joint_mean);
+            if let Some((mean, sigma)) = self.mirrored(encoding, chunk) {
+                for (k, &t) in chunk.iter().enumerate() {
+                    if within(t, encoding.span) {
+                        let row = k * JOINTS..(k + 1) * JOINTS;
+                        joint_mean[row.clone()]
+                            .copy_from_slice(&self.normalization.normalize(&mean[k]));
+                        let std = self.normalization.std;
+                        for (j, s) in joint_sigma[row].iter_mut().enumerate() {
+                            *s = sigma[k][j] / std[j];
+                        }
+                    }
+                }
+            }
             out.push(
                 chunk,
                 &model::values(p.image_mean),
                 &model::values(p.image_sigma),
-                &model::values(p.joint_mean),
+                &joint_mean,
                 &joint_sigma,
                 &self.normalization,
             );
         }
         Ok(out)
+    }
+
+    /// The mirror stage's joint means and σ at `targets` (radians and gripper units), where
+    /// `encoding` has reads for it; they stand between the first and the last observation
+    /// (the stage interpolates), the network's beyond them. Its σ was fitted on reads of
+    /// held-out sequences, so the file's σ scales (fitted to the network's σ) leave it as it is.
+    #[allow(clippy::type_complexity)]
+    fn mirrored(
+        &self,
+        encoding: &Encoding,
+        targets: &[f32],
+    ) -> Option<(Vec<[f32; JOINTS]>, Vec<[f32; JOINTS]>)> {
+        let (mirror, reads) = (self.model.mirror.as_ref()?, encoding.reads.as_ref()?);
+        Some(mirror.predict(&reads.times, &reads.joints, targets, &self.device))
     }
 
     /// Encode `observations`, then decode `target_times`.
@@ -178,7 +221,8 @@ impl Predictor {
 
     /// Only the joint means at `target_times` (radians and the gripper value, one row per
     /// target), from `observations` with blend `blend`: the image decoder, most of a target's
-    /// cost, is skipped. What an arm that imitates needs ([`crate::imitate`]).
+    /// cost, is skipped; frames only (blend 1), a model's mirror stage gives them between the
+    /// first and the last observation (see [`Encoding::reads`]). What an arm that imitates needs ([`crate::imitate`]).
     pub fn predict_joints(
         &self,
         observations: &Observations,
@@ -187,17 +231,42 @@ impl Predictor {
     ) -> Result<Vec<[f32; JOINTS]>, ModelError> {
         check_times(target_times)?;
         let encoding = self.encode(observations, blend)?;
+        let mut rows = self.network_joints(&encoding.representation, target_times)?;
+        if let Some((mean, _)) = self.mirrored(&encoding, target_times) {
+            for ((row, mirrored), &t) in rows.iter_mut().zip(mean).zip(target_times) {
+                if within(t, encoding.span) {
+                    *row = mirrored;
+                }
+            }
+        }
+        Ok(rows)
+    }
+
+    /// The joint means the network itself decodes at `target_times` from `representation`
+    /// (radians and the gripper value), without the image decoder.
+    fn network_joints(
+        &self,
+        representation: &Representation,
+        target_times: &[f32],
+    ) -> Result<Vec<[f32; JOINTS]>, ModelError> {
         let mut rows = Vec::with_capacity(target_times.len());
         for chunk in target_times.chunks(Self::CHUNK) {
             let (mean, _) = self
                 .model
-                .decode_joints(&encoding.representation, self.times(chunk))?;
+                .decode_joints(representation, self.times(chunk))?;
             for row in model::values(mean).chunks_exact(JOINTS) {
                 let row: [f32; JOINTS] = std::array::from_fn(|j| row[j]);
                 rows.push(self.normalization.denormalize(&row));
             }
         }
         Ok(rows)
+    }
+
+    /// The joints the network reads from frames alone (blend 1) at each observed time, in
+    /// radians (and gripper units): what the mirror stage starts from, and learns from.
+    pub fn reads(&self, observations: &Observations) -> Result<Vec<[f32; JOINTS]>, ModelError> {
+        let encoding = self.encode(observations, 1.0)?;
+        self.network_joints(&encoding.representation, &observations.times)
     }
 
     /// One chunk of target times as the `[1, M]` tensor the decoders take.
@@ -222,6 +291,11 @@ impl Predictor {
         }
         batch
     }
+}
+
+/// Whether `t` lies between the first and the last observed time.
+fn within(t: f32, (first, last): (f32, f32)) -> bool {
+    first <= t && t <= last
 }
 
 /// Fails unless every target time is a finite phase.

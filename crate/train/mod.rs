@@ -2,6 +2,7 @@
 //! learning-rate schedule, a held-out validation split, JSON-lines metrics, and atomic
 //! checkpoints that `--resume` continues exactly; on one device or, the batch split, several;
 //! the training frames read from disk as the batches need them.
+mod add_mirror;
 mod batch_stream;
 mod checkpoint;
 mod config;
@@ -9,6 +10,8 @@ mod data_parallel;
 mod error;
 mod frame_cache;
 mod metrics;
+mod mirror_examples;
+mod mirror_fit;
 mod sequence_store;
 mod split;
 mod train_device;
@@ -20,10 +23,13 @@ use batch_stream::BatchStream;
 use frame_cache::FrameCache;
 use sequence_store::SequenceStore;
 
+pub use add_mirror::{add_mirror, MirrorStage};
 pub use checkpoint::{Checkpoint, CheckpointState};
 pub use config::{Schedule, TrainConfig};
 pub use error::TrainError;
 pub use metrics::{Metrics, MetricsLog};
+pub use mirror_examples::{layout, MirrorExamples};
+pub use mirror_fit::{fit_mirror, MirrorFit, MirrorProgress};
 pub use split::Split;
 pub use train_device::TrainDevice;
 pub use train_devices::TrainDevices;

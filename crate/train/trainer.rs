@@ -103,7 +103,10 @@ impl Trainer {
                     Some(config.model.image_size),
                 )
                 .map_err(|e| TrainError::config("init", format!("{}: {e}", path.display())))?
-                .0;
+                .0
+                // A mirror stage learnt the file's network's reads: training leaves it behind
+                // (`--mirror` fits one to the result).
+                .without_mirror();
                 // A read-out of joints from frames asked for, which the file may lack.
                 if config.model.frame_joints == Some(true) {
                     model.reading_frame_joints(&device)?

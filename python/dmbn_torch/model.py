@@ -12,6 +12,8 @@ import torch
 import torch.nn as nn
 import torch.nn.functional as F
 
+from .mirror import Mirror
+
 # Architecture constants of crate/model (the original DMBN's widths).
 ENCODER_FILTERS = {64: [32, 64, 128, 128, 256], 128: [32, 64, 64, 128, 128, 256]}
 DECODER_FILTERS = {64: [256, 128, 64, 64, 32], 128: [256, 128, 128, 64, 64, 32]}
@@ -472,6 +474,8 @@ class Predictor(nn.Module):
         self.config = header["config"]
         self.normalization = header["normalization"]
         self.network = KINDS[self.config["kind"]](self.config)
+        # The mirror stage, where the file has one: the joints from frames alone (blend 1).
+        self.mirror = Mirror(self.config["mirror"]) if self.config.get("mirror") else None
 
     def state_dict_for_export(self):
         return {k.removeprefix("network."): v for k, v in self.state_dict().items()}
@@ -498,11 +502,23 @@ class Predictor(nn.Module):
         target_times = torch.as_tensor(target_times, dtype=torch.float32, device=device)
         parts = [self.network.decode(r, chunk.unsqueeze(0)) for chunk in target_times.split(CHUNK)]
         out = {k: torch.cat([p[k][0] for p in parts]) for k in parts[0] if k != "image_drawn"}
+        joint_mean = out["joint_mean"] * std + mean
+        joint_sigma = out["joint_sigma"] * std * self.joint_sigma_scale(contexts.times, target_times)
+        if self.mirror is not None and float(blend) == 1.0:
+            # As the Rust Predictor: the stage answers between the first and the last
+            # observation, its σ its own (fitted on held-out reads).
+            observed = contexts.times[0]
+            reads = self.network.decode_joints(r, observed.unsqueeze(0))[0][0] * std + mean
+            mirror_mean, mirror_sigma = (v.to(device) for v in self.mirror.predict(
+                observed.cpu(), reads.cpu(), target_times.cpu()))
+            within = ((target_times >= observed.min()) & (target_times <= observed.max())).unsqueeze(1)
+            joint_mean = torch.where(within, mirror_mean, joint_mean)
+            joint_sigma = torch.where(within, mirror_sigma, joint_sigma)
         return {
             "image_mean": out["image_mean"].permute(0, 2, 3, 1),
             "image_sigma": out["image_sigma"].permute(0, 2, 3, 1),
-            "joint_mean": out["joint_mean"] * std + mean,
-            "joint_sigma": out["joint_sigma"] * std * self.joint_sigma_scale(contexts.times, target_times),
+            "joint_mean": joint_mean.to(device),
+            "joint_sigma": joint_sigma.to(device),
         }
 
     def joint_sigma_scale(self, observed_times, target_times):
@@ -525,7 +541,8 @@ def load(path, device="cpu"):
     if "dmbn" not in metadata:
         raise ValueError(f"{path}: no `dmbn` metadata: not written by `dmbn export`")
     model = Predictor(json.loads(metadata["dmbn"]))
-    tensors = {"network." + k: v.float() for k, v in load_file(path).items()}
+    tensors = {("" if k.startswith("mirror.") else "network.") + k: v.float()
+               for k, v in load_file(path).items()}
     model.load_state_dict(tensors, strict=True)
     return model.to(device).eval()
 

@@ -106,7 +106,9 @@ def train_config(args):
         if args.model and args.model != file["kind"]:
             raise ValueError(f"--init holds a {file['kind']} model, not {args.model}: "
                              "leave --model out to train it")
-        model = dict(file, joint_weight=args.joint_weight,
+        # A mirror stage learnt the file's network's reads: training the network leaves it
+        # behind (`train --init FILE --steps 0 --mirror` fits one to the result).
+        model = dict(file, joint_weight=args.joint_weight, mirror=None,
                      frame_joints=True if args.frame_joints else file.get("frame_joints"))
     elif not args.model:
         raise ValueError("--model missing: pass --model dmbn|pte|attn")

@@ -6,9 +6,12 @@ use clap::{Parser, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 
 use dmbn::augment::TimeWarpConfig;
-use dmbn::data::{id_list, JointScale};
+use dmbn::data::{id_list, write_atomic, JointScale};
 use dmbn::model::{read_header, Initialization, ModelConfig, ModelKind};
-use dmbn::train::{Schedule, TrainConfig, TrainDevices, TrainError, Trainer};
+use dmbn::train::{
+    add_mirror, MirrorFit, MirrorStage, Schedule, Split, TrainConfig, TrainDevices, TrainError,
+    Trainer,
+};
 
 /// `--model`: the command line's names of [`ModelKind`].
 #[derive(Clone, Copy, ValueEnum)]
@@ -221,6 +224,23 @@ struct Args {
     #[arg(long, default_value_t = defaults().frame_cache_mib, conflicts_with = "resume")]
     frame_cache_mib: usize,
 
+    /// Then fit the mirror stage to the final model (a second stage in joint space that turns
+    /// the joints the network reads from frames alone into the trajectory: `dmbn imitate`,
+    /// the page's frames-only joints): the network reads --mirror-draws glimpse layouts of
+    /// every training sequence; the stage's σ is fitted on the validation ids' reads. With
+    /// --init FILE --steps 0, adds a stage to FILE's network as it is (its σ scales kept).
+    #[arg(long)]
+    mirror: bool,
+    /// Adam steps of the mirror stage's fit.
+    #[arg(long, default_value_t = MirrorFit::default().steps, requires = "mirror")]
+    mirror_steps: u64,
+    /// Glimpse layouts (2-8 glimpses) read per sequence for the mirror stage.
+    #[arg(long, default_value_t = 6, requires = "mirror")]
+    mirror_draws: usize,
+    /// Width of the mirror stage's three hidden layers.
+    #[arg(long, default_value_t = MirrorFit::default().width, requires = "mirror")]
+    mirror_width: usize,
+
     /// Store the final and best models' weights in f16 (half the size; a resumed run keeps
     /// the run's choice, and --half with --resume turns it on).
     #[arg(long)]
@@ -270,6 +290,15 @@ fn defaults() -> TrainConfig {
 }
 
 fn run(args: Args) -> Result<(), TrainError> {
+    if args.mirror && args.mirror_draws == 0 {
+        return Err(TrainError::config(
+            "mirror_draws",
+            "is 0: expected at least one glimpse layout per sequence",
+        ));
+    }
+    if args.mirror && args.steps == Some(0) {
+        return mirror_only(&args);
+    }
     let model = args.model.map(ModelKind::from);
     let mut trainer = if args.resume {
         let mut trainer =
@@ -323,7 +352,8 @@ fn run(args: Args) -> Result<(), TrainError> {
                     .with_coarse_tail(args.coarse_tail.then_some(true))
                     .with_encoder_filters(args.encoder_filters.clone())
             })
-            .with_joint_weight(args.joint_weight);
+            .with_joint_weight(args.joint_weight)
+            .with_mirror(None);
         let model = if args.frame_joints {
             model.with_frame_joints(Some(true))
         } else {
@@ -405,6 +435,13 @@ fn run(args: Args) -> Result<(), TrainError> {
         ));
     })?;
     bar.finish();
+    if args.mirror {
+        let data = trainer
+            .data()
+            .ok_or_else(|| TrainError::config("data", "missing: pass --data"))?;
+        let split = Split::open(data, trainer.config().val_fraction)?;
+        fit_mirror_stage(&args, &split, &path)?;
+    }
     println!("wrote {}", path.display());
     if let Some((step, score)) = trainer.best_quality() {
         println!(
@@ -412,5 +449,110 @@ fn run(args: Args) -> Result<(), TrainError> {
             trainer.best_path().display()
         );
     }
+    Ok(())
+}
+
+/// `--init FILE --steps 0 --mirror`: FILE as it is (its network, normalisation and σ scales)
+/// with a mirror stage, as --out/model.dmbn.
+fn mirror_only(args: &Args) -> Result<(), TrainError> {
+    let init = args.init.as_deref().ok_or_else(|| {
+        TrainError::config(
+            "init",
+            "missing: --steps 0 --mirror fits a mirror stage to a model file's network: pass --init FILE",
+        )
+    })?;
+    let Some(data) = args.data.as_deref() else {
+        return Err(TrainError::config("data", "missing: pass --data"));
+    };
+    let split = Split::open(data, args.val_fraction)?;
+    let bytes = std::fs::read(init).map_err(|e| TrainError::Io {
+        path: init.to_path_buf(),
+        message: e.to_string(),
+    })?;
+    std::fs::create_dir_all(&args.out).map_err(|e| TrainError::Io {
+        path: args.out.clone(),
+        message: e.to_string(),
+    })?;
+    let path = args.out.join("model.dmbn");
+    write_atomic(&path, &bytes)?;
+    fit_mirror_stage(args, &split, &path)?;
+    println!("wrote {}", path.display());
+    Ok(())
+}
+
+/// `--mirror`: the mirror stage fitted to the model file at `path` (rewritten with it), on
+/// the CPU.
+fn fit_mirror_stage(args: &Args, split: &Split, path: &std::path::Path) -> Result<(), TrainError> {
+    let fit = MirrorFit {
+        width: args.mirror_width,
+        steps: args.mirror_steps,
+        seed: args.seed,
+        ..MirrorFit::default()
+    };
+    eprintln!(
+        "fitting the mirror stage: {} training and {} validation sequences, {} layouts each",
+        split.train.len(),
+        split.val.len(),
+        args.mirror_draws
+    );
+    let bar = ProgressBar::new(0);
+    bar.set_style(
+        ProgressStyle::with_template(
+            "{bar:30} {pos}/{len} {msg} [{elapsed_precise} < {eta_precise}]",
+        )
+        .expect("valid template"),
+    );
+    let started = std::time::Instant::now();
+    let val = if split.validates_on_training_data() {
+        &[][..]
+    } else {
+        &split.val[..]
+    };
+    add_mirror(
+        path,
+        &split.train,
+        val,
+        args.mirror_draws,
+        fit,
+        &burn::tensor::Device::flex().autodiff(),
+        |stage| match stage {
+            MirrorStage::Reading { done, total } => {
+                bar.set_length(total as u64);
+                bar.set_position(done as u64);
+                bar.set_message("sequences read");
+                if done == total {
+                    bar.suspend(|| {
+                        eprintln!(
+                            "read {total} sequences' glimpse layouts ({:.0?})",
+                            started.elapsed()
+                        )
+                    });
+                }
+            }
+            MirrorStage::Fitting(p) => {
+                if p.step <= 500 {
+                    bar.reset();
+                }
+                bar.set_length(fit.steps);
+                bar.set_position(p.step);
+                let message = format!(
+                    "joint RMSE {:.4} rad, validation {:.4}",
+                    p.rmse, p.held_out_rmse
+                );
+                if p.step % 5000 == 0 || p.step == fit.steps {
+                    bar.suspend(|| {
+                        eprintln!(
+                            "mirror stage step {}/{}: {message} ({:.0?})",
+                            p.step,
+                            fit.steps,
+                            started.elapsed()
+                        )
+                    });
+                }
+                bar.set_message(message);
+            }
+        },
+    )?;
+    bar.finish();
     Ok(())
 }

@@ -1,0 +1,144 @@
+//! What the [`super::Mirror`] stage sees of a target time: the glimpses side by side and where
+//! the linear interpolation of their reads puts the joints there. Plain arrays, built the same
+//! way for training and for inference, natively and in wasm.
+use crate::data::JOINTS;
+
+/// Glimpses the stage sees at once: with more, each target sees the nearest in time.
+pub const MIRROR_SLOTS: usize = 8;
+/// Frequencies of the target phase's sine and cosine features (π·f·phase, f = 1…8).
+pub const MIRROR_FREQUENCIES: usize = 8;
+/// Values per slot: the read joints, the glimpse's time less the target's, 1 (the slot is
+/// filled).
+const SLOT: usize = JOINTS + 2;
+/// Input features per target: the slots, the interpolated reads, the phase and its
+/// sines and cosines.
+pub const MIRROR_INPUTS: usize = MIRROR_SLOTS * SLOT + JOINTS + 1 + 2 * MIRROR_FREQUENCIES;
+
+/// The stage's inputs at `targets` (phases) for glimpses at `times` whose joints were read as
+/// `reads` (radians and the gripper value; any order, at least one): `MIRROR_INPUTS` features
+/// per target, and the reads linearly interpolated there (`JOINTS` per target; held constant
+/// beyond the first and the last glimpse), which the stage corrects.
+pub fn mirror_inputs(
+    times: &[f32],
+    reads: &[[f32; JOINTS]],
+    targets: &[f32],
+) -> (Vec<f32>, Vec<f32>) {
+    assert_eq!(times.len(), reads.len(), "one read per glimpse");
+    assert!(!times.is_empty(), "at least one glimpse");
+    let mut order: Vec<usize> = (0..times.len()).collect();
+    order.sort_by(|&a, &b| times[a].total_cmp(&times[b]));
+    let mut x = Vec::with_capacity(targets.len() * MIRROR_INPUTS);
+    let mut start = Vec::with_capacity(targets.len() * JOINTS);
+    for &phase in targets {
+        let interpolated = interpolate(&order, times, reads, phase);
+        for &i in &slots(&order, times, phase) {
+            x.extend_from_slice(&reads[i]);
+            x.extend([times[i] - phase, 1.0]);
+        }
+        x.resize(
+            x.len() + (MIRROR_SLOTS - order.len().min(MIRROR_SLOTS)) * SLOT,
+            0.0,
+        );
+        x.extend_from_slice(&interpolated);
+        x.push(phase);
+        let angle = |f: usize| std::f32::consts::PI * phase * f as f32;
+        x.extend((1..=MIRROR_FREQUENCIES).map(|f| angle(f).sin()));
+        x.extend((1..=MIRROR_FREQUENCIES).map(|f| angle(f).cos()));
+        start.extend_from_slice(&interpolated);
+    }
+    (x, start)
+}
+
+/// The glimpses a target at `phase` sees, in time order: all of them, or the
+/// [`MIRROR_SLOTS`] nearest in time when there are more.
+fn slots(order: &[usize], times: &[f32], phase: f32) -> Vec<usize> {
+    if order.len() <= MIRROR_SLOTS {
+        return order.to_vec();
+    }
+    let mut near = order.to_vec();
+    near.sort_by(|&a, &b| {
+        (times[a] - phase)
+            .abs()
+            .total_cmp(&(times[b] - phase).abs())
+    });
+    near.truncate(MIRROR_SLOTS);
+    near.sort_by(|&a, &b| times[a].total_cmp(&times[b]));
+    near
+}
+
+/// The reads linearly interpolated at `phase` (`order`: the glimpses in time order).
+fn interpolate(
+    order: &[usize],
+    times: &[f32],
+    reads: &[[f32; JOINTS]],
+    phase: f32,
+) -> [f32; JOINTS] {
+    let (first, last) = (order[0], order[order.len() - 1]);
+    if phase <= times[first] {
+        return reads[first];
+    }
+    if phase >= times[last] {
+        return reads[last];
+    }
+    let after = order.partition_point(|&i| times[i] <= phase);
+    let (a, b) = (order[after - 1], order[after]);
+    let w = (phase - times[a]) / (times[b] - times[a]);
+    std::array::from_fn(|j| reads[a][j] + w * (reads[b][j] - reads[a][j]))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn read(v: f32) -> [f32; JOINTS] {
+        std::array::from_fn(|j| v + j as f32)
+    }
+
+    #[test]
+    fn interpolates_between_glimpses_in_any_order_and_holds_beyond_them() {
+        let (x, start) = mirror_inputs(
+            &[1.0, 0.0, 0.5],
+            &[read(4.0), read(0.0), read(2.0)],
+            &[0.25, 0.75, 1.0, -0.5],
+        );
+        assert_eq!(x.len(), 4 * MIRROR_INPUTS);
+        assert_eq!(&start[..JOINTS], &read(1.0));
+        assert_eq!(&start[JOINTS..2 * JOINTS], &read(3.0));
+        assert_eq!(&start[2 * JOINTS..3 * JOINTS], &read(4.0));
+        assert_eq!(&start[3 * JOINTS..], &read(0.0));
+    }
+
+    #[test]
+    fn slots_are_in_time_order_then_zeros() {
+        let (x, _) = mirror_inputs(&[1.0, 0.0], &[read(4.0), read(0.0)], &[0.25]);
+        assert_eq!(&x[..JOINTS], &read(0.0));
+        assert_eq!(x[JOINTS..SLOT], [-0.25, 1.0]);
+        assert_eq!(&x[SLOT..SLOT + JOINTS], &read(4.0));
+        assert_eq!(x[SLOT + JOINTS..2 * SLOT], [0.75, 1.0]);
+        assert!(x[2 * SLOT..MIRROR_SLOTS * SLOT].iter().all(|&v| v == 0.0));
+        let tail = &x[MIRROR_SLOTS * SLOT..];
+        assert_eq!(&tail[..JOINTS], &read(1.0));
+        assert_eq!(tail[JOINTS], 0.25);
+        assert!((tail[JOINTS + 1] - (std::f32::consts::PI * 0.25).sin()).abs() < 1e-6);
+        assert!(
+            (tail[JOINTS + 1 + MIRROR_FREQUENCIES] - (std::f32::consts::PI * 0.25).cos()).abs()
+                < 1e-6
+        );
+    }
+
+    #[test]
+    fn more_glimpses_than_slots_show_the_nearest() {
+        let times: Vec<f32> = (0..12).map(|i| i as f32 / 11.0).collect();
+        let reads: Vec<_> = (0..12).map(|i| read(i as f32)).collect();
+        let (x, _) = mirror_inputs(&times, &reads, &[1.0]);
+        let first: Vec<f32> = x[..JOINTS].to_vec();
+        assert_eq!(
+            first,
+            read(4.0),
+            "the 8 nearest to the end are glimpses 4-11"
+        );
+        assert!(x[..MIRROR_SLOTS * SLOT]
+            .chunks(SLOT)
+            .all(|s| s[SLOT - 1] == 1.0));
+    }
+}

@@ -1,0 +1,70 @@
+"""The mirror stage (crate/model/mirror.rs): shown only frames (blend 1), the joints the network
+reads at each glimpse, seen side by side, correct their linear interpolation at each target.
+
+`mirror_inputs` builds the features exactly as crate/model/mirror_inputs.rs does; `Mirror`
+holds the tensors `dmbn export` writes under `mirror.` (`train --mirror` fits them).
+"""
+import math
+
+import torch
+import torch.nn as nn
+import torch.nn.functional as F
+
+JOINTS = 7
+SLOTS = 8
+FREQUENCIES = 8
+SLOT = JOINTS + 2
+INPUTS = SLOTS * SLOT + JOINTS + 1 + 2 * FREQUENCIES
+LAYERS = 3
+SIGMA_FLOOR = 1e-4
+
+
+def interpolate(times, reads, targets):
+    """`reads` [K, 7] at sorted `times` [K] linearly interpolated at `targets` [M], held
+    beyond the first and the last."""
+    if len(times) == 1:
+        return reads[:1].expand(len(targets), -1)
+    after = torch.searchsorted(times, targets, right=True).clamp(1, len(times) - 1)
+    a, b = after - 1, after
+    w = ((targets - times[a]) / (times[b] - times[a])).unsqueeze(1)
+    inner = reads[a] + w * (reads[b] - reads[a])
+    inner = torch.where((targets <= times[0]).unsqueeze(1), reads[0], inner)
+    return torch.where((targets >= times[-1]).unsqueeze(1), reads[-1], inner)
+
+
+def mirror_inputs(times, reads, targets):
+    """The features [M, INPUTS] and the interpolated reads [M, 7] at `targets` (phases) for
+    glimpses at `times` [K] (any order) read as `reads` [K, 7]."""
+    order = torch.sort(times, stable=True).indices
+    times, reads = times[order], reads[order]
+    start = interpolate(times, reads, targets)
+    rows = []
+    for m, phase in enumerate(targets):
+        near = torch.arange(len(times))
+        if len(times) > SLOTS:
+            near = torch.sort((times - phase).abs(), stable=True).indices[:SLOTS].sort().values
+        slots = torch.cat([reads[near], (times[near] - phase).unsqueeze(1),
+                           torch.ones(len(near), 1)], 1).flatten()
+        angle = math.pi * phase * torch.arange(1, FREQUENCIES + 1, dtype=torch.float32)
+        rows.append(torch.cat([slots, torch.zeros((SLOTS - len(near)) * SLOT), start[m],
+                               phase.reshape(1), angle.sin(), angle.cos()]))
+    return torch.stack(rows), start
+
+
+class Mirror(nn.Module):
+    def __init__(self, width):
+        super().__init__()
+        self.scale = nn.Parameter(torch.ones(INPUTS), requires_grad=False)
+        self.layers = nn.ModuleList(nn.Linear(w, width) for w in [INPUTS] + [width] * (LAYERS - 1))
+        self.mean = nn.Linear(width, JOINTS)
+        self.sigma = nn.Linear(width, JOINTS)
+
+    def forward(self, x, start):
+        h = x / self.scale
+        for layer in self.layers:
+            h = F.gelu(layer(h))
+        return start + self.mean(h), F.softplus(self.sigma(h.detach())) + SIGMA_FLOOR
+
+    def predict(self, times, reads, targets):
+        """Mean and σ [M, 7] (radians and gripper units) at `targets`."""
+        return self(*mirror_inputs(times, reads, targets))
