@@ -139,6 +139,12 @@ if [ "${TRAIN:-0}" = 1 ]; then
       --out "$out/runs/$m-calibrated.dmbn"
     file[$m]=$out/runs/$m-calibrated.dmbn
   done
+  # The attentive model's mirror stage (docs/results.md, "The mirror stage"): fitted to the
+  # calibrated network on the network's own frames-only reads of the training ids.
+  if [ "$set_name" = sim ] && [ -n "${file[attn]:-}" ]; then
+    "$bin/train" --init "${file[attn]}" --steps 0 --mirror --data "$data" --out "$out/runs/attn-mirror"
+    file[attn]=$out/runs/attn-mirror/model.dmbn
+  fi
 fi
 
 # Table 1: DMBN against DMBN-PTE with and without augmentation. On the original data the
