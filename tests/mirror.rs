@@ -290,3 +290,27 @@ fn train_mirror_adds_a_stage_to_a_model_file() {
     assert!(!bad.status.success());
     assert!(stderr.contains("mirror_draws"), "{stderr}");
 }
+
+#[test]
+fn calibrating_frames_only_predictions_of_a_file_with_a_stage_is_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("data");
+    support::simulated_dataset(&data, 0..1, &[Action::Grasp], 910);
+    let run = std::process::Command::new(env!("CARGO_BIN_EXE_dmbn"))
+        .arg("calibrate")
+        .arg("--model")
+        .arg(support::asset("models/attn-sim.dmbn"))
+        .arg("--data")
+        .arg(&data)
+        .args(["--ids", "0-0", "--blend", "1", "--out"])
+        .arg(tmp.path().join("out.dmbn"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(!run.status.success());
+    assert!(
+        stderr.contains("mirror stage") && stderr.contains("blend below 1"),
+        "{stderr}"
+    );
+    assert!(!tmp.path().join("out.dmbn").exists());
+}
