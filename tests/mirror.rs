@@ -199,6 +199,7 @@ fn fitting_the_stage_lowers_the_error_of_the_interpolated_reads() {
     );
     let fit = MirrorFit {
         width: 32,
+        draws: 2,
         steps: 400,
         batch: 128,
         lr: 3e-3,

@@ -1,5 +1,12 @@
 use serde::{Deserialize, Serialize};
 
+/// Whether target time `t` lies within `span`, the first and the last observed time: between
+/// the observations, where a calibration's `between` factor and a mirror stage apply;
+/// outside, forecasting.
+pub fn within_span(t: f32, span: (f32, f32)) -> bool {
+    (span.0..=span.1).contains(&t)
+}
+
 /// A calibration's factors on the predicted joint σ (`dmbn calibrate`), fitted after training
 /// on sequences the model did not train on: one between the observations, one when
 /// forecasting outside their span (before the first observed time or after the last), where
@@ -22,7 +29,7 @@ impl JointSigmaScale {
 
     /// The factor at target time `t` for observations whose times span `span` (first, last).
     pub fn at(&self, t: f32, span: (f32, f32)) -> f32 {
-        if (span.0..=span.1).contains(&t) {
+        if within_span(t, span) {
             self.between
         } else {
             self.forecast.unwrap_or(self.between)

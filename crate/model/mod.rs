@@ -69,7 +69,7 @@ pub use init::{glorot, Initialization};
 pub use interpolation::{gaps, interpolation_tensors, linear_weights};
 pub use joint_decoder::{JointDecoder, JointDecoderConfig};
 pub use joint_encoder::{JointEncoder, JointEncoderConfig};
-pub use joint_sigma_scale::JointSigmaScale;
+pub use joint_sigma_scale::{within_span, JointSigmaScale};
 pub use loss::{gaussian_loss, joint_nll, Loss, LossValues};
 pub use mirror::{Mirror, MirrorConfig, MIRROR_LAYERS, MIRROR_SIGMA_FLOOR};
 pub use mirror_inputs::{mirror_inputs, MIRROR_FREQUENCIES, MIRROR_INPUTS, MIRROR_SLOTS};

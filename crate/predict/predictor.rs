@@ -4,8 +4,8 @@ use super::{Encoding, Observations, Reads, SequencePrediction};
 use crate::augment::Batch;
 use crate::data::JOINTS;
 use crate::model::{
-    self, tensors, EncodedContexts, JointSigmaScale, Model, ModelError, ModelKind, Normalization,
-    Representation,
+    self, tensors, within_span, EncodedContexts, JointSigmaScale, Model, ModelError, ModelKind,
+    Normalization, Representation,
 };
 
 /// A trained model ready for inference on the CPU (flex backend): encode observations once,
@@ -171,13 +171,12 @@ impl Predictor {
             let mut joint_mean = model::values(p.joint_mean);
             if let Some((mean, sigma)) = self.mirrored(encoding, chunk) {
                 for (k, &t) in chunk.iter().enumerate() {
-                    if within(t, encoding.span) {
+                    if within_span(t, encoding.span) {
                         let row = k * JOINTS..(k + 1) * JOINTS;
                         joint_mean[row.clone()]
                             .copy_from_slice(&self.normalization.normalize(&mean[k]));
-                        let std = self.normalization.std;
                         for (j, s) in joint_sigma[row].iter_mut().enumerate() {
-                            *s = sigma[k][j] / std[j];
+                            *s = sigma[k][j] / self.normalization.std[j];
                         }
                     }
                 }
@@ -234,7 +233,7 @@ impl Predictor {
         let mut rows = self.network_joints(&encoding.representation, target_times)?;
         if let Some((mean, _)) = self.mirrored(&encoding, target_times) {
             for ((row, mirrored), &t) in rows.iter_mut().zip(mean).zip(target_times) {
-                if within(t, encoding.span) {
+                if within_span(t, encoding.span) {
                     *row = mirrored;
                 }
             }
@@ -266,7 +265,11 @@ impl Predictor {
     /// radians (and gripper units): what the mirror stage starts from, and learns from.
     pub fn reads(&self, observations: &Observations) -> Result<Vec<[f32; JOINTS]>, ModelError> {
         let encoding = self.encode(observations, 1.0)?;
-        self.network_joints(&encoding.representation, &observations.times)
+        match encoding.reads {
+            // A model with a stage read them while encoding.
+            Some(reads) => Ok(reads.joints),
+            None => self.network_joints(&encoding.representation, &observations.times),
+        }
     }
 
     /// One chunk of target times as the `[1, M]` tensor the decoders take.
@@ -291,11 +294,6 @@ impl Predictor {
         }
         batch
     }
-}
-
-/// Whether `t` lies between the first and the last observed time.
-fn within(t: f32, (first, last): (f32, f32)) -> bool {
-    first <= t && t <= last
 }
 
 /// Fails unless every target time is a finite phase.

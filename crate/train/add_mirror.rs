@@ -20,24 +20,18 @@ pub enum MirrorStage {
 
 /// Fits a mirror stage ([`crate::model::Mirror`]) to the model file at `path` and rewrites it
 /// (atomically) with the stage, keeping its network, normalisation and σ scales: the
-/// network reads the joints from `draws` glimpse layouts of each `train` sequence (frames
+/// network reads the joints from `fit.draws` glimpse layouts of each `train` sequence (frames
 /// only) and of each `held_out` one, the stage's mean learns from the first and its σ from
 /// the second (from the first too when `held_out` is empty).
 pub fn add_mirror(
     path: &Path,
     train: &[SequenceRef],
     held_out: &[SequenceRef],
-    draws: usize,
     fit: MirrorFit,
     device: &Device,
     mut on_progress: impl FnMut(MirrorStage),
 ) -> Result<(), TrainError> {
-    if draws == 0 {
-        return Err(TrainError::config(
-            "mirror_draws",
-            "is 0: expected at least one glimpse layout per sequence",
-        ));
-    }
+    fit.validate()?;
     let bytes = std::fs::read(path).map_err(TrainError::io(path))?;
     let predictor = Predictor::from_bytes(&bytes).map_err(model::ModelError::in_file(path))?;
     let size = predictor.model().image_size() as u32;
@@ -50,7 +44,7 @@ pub fn add_mirror(
         .enumerate()
     {
         let seq = read_sequence(&r.dir, r.id, Some(size))?;
-        sets[set].add(&predictor, &seq, draws, &mut rng)?;
+        sets[set].add(&predictor, &seq, fit.draws, &mut rng)?;
         on_progress(MirrorStage::Reading {
             done: done + 1,
             total,

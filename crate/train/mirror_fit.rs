@@ -13,6 +13,8 @@ use crate::model::{Mirror, MirrorConfig, MIRROR_INPUTS};
 pub struct MirrorFit {
     /// Width of the stage's hidden layers.
     pub width: usize,
+    /// Glimpse layouts the network reads per sequence ([`crate::train::layout`]).
+    pub draws: usize,
     /// Adam steps (learning rate `lr`, cosine schedule to 0).
     pub steps: u64,
     /// Examples per step.
@@ -27,11 +29,31 @@ impl Default for MirrorFit {
     fn default() -> Self {
         MirrorFit {
             width: 256,
+            draws: 9,
             steps: 20_000,
             batch: 512,
             lr: 1e-3,
             seed: 0,
         }
+    }
+}
+
+impl MirrorFit {
+    /// Fails on a setting that leaves nothing to fit: no layout read, no width, no batch.
+    pub fn validate(&self) -> Result<(), TrainError> {
+        if self.draws == 0 {
+            return Err(TrainError::config(
+                "mirror_draws",
+                "is 0: expected at least one glimpse layout per sequence",
+            ));
+        }
+        if self.width == 0 || self.batch == 0 {
+            return Err(TrainError::config(
+                "mirror",
+                "the stage's width and batch must be at least 1",
+            ));
+        }
+        Ok(())
     }
 }
 
@@ -55,6 +77,7 @@ pub fn fit_mirror(
     device: &Device,
     mut on_progress: impl FnMut(MirrorProgress),
 ) -> Result<Mirror, TrainError> {
+    fit.validate()?;
     let held_out = held_out.unwrap_or(train);
     for (name, examples) in [("training", train), ("held-out", held_out)] {
         if examples.rows() == 0 {
@@ -63,12 +86,6 @@ pub fn fit_mirror(
                 format!("no {name} examples to fit the mirror stage on"),
             ));
         }
-    }
-    if fit.width == 0 || fit.batch == 0 {
-        return Err(TrainError::config(
-            "mirror",
-            "the stage's width and batch must be at least 1",
-        ));
     }
     device.seed(fit.seed);
     let mut mirror = MirrorConfig::new().with_width(fit.width).init(device);

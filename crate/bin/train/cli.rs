@@ -235,7 +235,7 @@ struct Args {
     #[arg(long, default_value_t = MirrorFit::default().steps, requires = "mirror")]
     mirror_steps: u64,
     /// Glimpse layouts (2-8 glimpses) read per sequence for the mirror stage.
-    #[arg(long, default_value_t = 6, requires = "mirror")]
+    #[arg(long, default_value_t = MirrorFit::default().draws, requires = "mirror")]
     mirror_draws: usize,
     /// Width of the mirror stage's three hidden layers.
     #[arg(long, default_value_t = MirrorFit::default().width, requires = "mirror")]
@@ -290,11 +290,8 @@ fn defaults() -> TrainConfig {
 }
 
 fn run(args: Args) -> Result<(), TrainError> {
-    if args.mirror && args.mirror_draws == 0 {
-        return Err(TrainError::config(
-            "mirror_draws",
-            "is 0: expected at least one glimpse layout per sequence",
-        ));
+    if args.mirror {
+        mirror_fit(&args).validate()?;
     }
     if args.mirror && args.steps == Some(0) {
         return mirror_only(&args);
@@ -480,20 +477,26 @@ fn mirror_only(args: &Args) -> Result<(), TrainError> {
     Ok(())
 }
 
-/// `--mirror`: the mirror stage fitted to the model file at `path` (rewritten with it), on
-/// the CPU.
-fn fit_mirror_stage(args: &Args, split: &Split, path: &std::path::Path) -> Result<(), TrainError> {
-    let fit = MirrorFit {
+/// The `--mirror-*` flags' fit.
+fn mirror_fit(args: &Args) -> MirrorFit {
+    MirrorFit {
         width: args.mirror_width,
+        draws: args.mirror_draws,
         steps: args.mirror_steps,
         seed: args.seed,
         ..MirrorFit::default()
-    };
+    }
+}
+
+/// `--mirror`: the mirror stage fitted to the model file at `path` (rewritten with it), on
+/// the CPU.
+fn fit_mirror_stage(args: &Args, split: &Split, path: &std::path::Path) -> Result<(), TrainError> {
+    let fit = mirror_fit(args);
     eprintln!(
         "fitting the mirror stage: {} training and {} validation sequences, {} layouts each",
         split.train.len(),
         split.val.len(),
-        args.mirror_draws
+        fit.draws
     );
     let bar = ProgressBar::new(0);
     bar.set_style(
@@ -512,7 +515,6 @@ fn fit_mirror_stage(args: &Args, split: &Split, path: &std::path::Path) -> Resul
         path,
         &split.train,
         val,
-        args.mirror_draws,
         fit,
         &burn::tensor::Device::flex().autodiff(),
         |stage| match stage {
