@@ -14,7 +14,7 @@ use rand::SeedableRng;
 use rand_pcg::Pcg64;
 
 use dmbn::augment::{Sampler, SamplerConfig};
-use dmbn::data::{image_sizes_text, Normalization, IMAGE_SIZES};
+use dmbn::data::{image_sizes_text, Normalization, IMAGE_SIZES, JOINTS};
 use dmbn::model::{tensors, ModelConfig, ModelKind};
 use dmbn::predict::{Observations, Predictor};
 use dmbn::sim::{self, Action};
@@ -54,7 +54,7 @@ fn main() {
                 .map(move |a| sim::episode(a, seed, size as u32).expect("simulator"))
         })
         .collect();
-    let norm = Normalization::fit(pool.iter().flat_map(|s| s.joints.iter()));
+    let norm = Normalization::fit(JOINTS, pool.iter().flat_map(|s| s.joints.rows()));
     let sampler = Sampler::new(SamplerConfig {
         batch: 8,
         max_contexts: 5,
@@ -92,7 +92,7 @@ fn main() {
 
         let device = Device::flex();
         let fresh = config.init(&device).expect("valid config");
-        let predictor = Predictor::new(fresh, norm);
+        let predictor = Predictor::new(fresh, norm.clone());
         let seq = &pool[0];
         let observations = Observations::from_sequence(seq, &[0, 10, 20, 30, 40]).expect("steps");
         let one = median_ms(REPEATS * 5, || {

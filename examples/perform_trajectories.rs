@@ -8,7 +8,7 @@
 //! ```
 use std::path::Path;
 
-use dmbn::data::{read_joints, Dataset, Disk};
+use dmbn::data::{read_joints, Dataset, Disk, JOINTS};
 use dmbn::imitate::enact;
 use dmbn::sim::{Action, PushMiss};
 
@@ -33,6 +33,17 @@ fn main() -> Result<(), String> {
             let demo = dataset.read(r, None).map_err(|e| e.to_string())?;
             let dir = Path::new(folder).join(r.id.to_string()).join(action.name());
             let rows = read_joints(&Disk, &dir, r.id).map_err(|e| e.to_string())?;
+            let rows = rows
+                .rows()
+                .map(<[f32; JOINTS]>::try_from)
+                .collect::<Result<Vec<_>, _>>()
+                .map_err(|_| {
+                    format!(
+                        "{}: {} joint values a step, the arm takes {JOINTS}",
+                        dir.display(),
+                        rows.width()
+                    )
+                })?;
             let done = enact(&demo, action, rows, Vec::new())
                 .map_err(|e| format!("{}: {e}", dir.display()))?;
             n += 1;

@@ -19,12 +19,22 @@ const TO: i64 = 20;
 /// Per step, how far the grasp point is along the demonstration's push (metres, from its
 /// start), or `None` while it is above table height (where it pushes nothing).
 fn reach(demo: &Sequence, episode: &Sequence) -> Vec<Option<f32>> {
-    let (start, end) = (demo.object[0], demo.object[demo.len() - 1]);
+    let object = demo
+        .object
+        .as_ref()
+        .expect("the demonstration's object track");
+    let (start, end) = (object[0], object[demo.len() - 1]);
     let push = [end[0] - start[0], end[1] - start[1]];
     let length = push[0].hypot(push[1]);
-    let low = demo.endpoint.iter().map(|e| e[2]).fold(f32::MAX, f32::min) + 0.02;
+    let demo_endpoint = demo
+        .endpoint
+        .as_ref()
+        .expect("the demonstration's endpoint");
+    let low = demo_endpoint.iter().map(|e| e[2]).fold(f32::MAX, f32::min) + 0.02;
     episode
         .endpoint
+        .as_ref()
+        .expect("the episode's endpoint")
         .iter()
         .map(|e| {
             (e[2] < low)

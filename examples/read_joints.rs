@@ -34,8 +34,11 @@ fn main() -> Result<(), String> {
         let observed = Observations::from_sequence(&seq, &steps).map_err(|e| e.to_string())?;
         let read = predictor.reads(&observed).map_err(|e| e.to_string())?;
         let text: String = read
-            .iter()
-            .map(|row| row.map(|v| v.to_string()).join(" ") + "\n")
+            .rows()
+            .map(|row| {
+                let values: Vec<String> = row.iter().map(|v| v.to_string()).collect();
+                values.join(" ") + "\n"
+            })
             .collect();
         let dir = format!("{out}/{}/{}", r.id, r.action);
         std::fs::create_dir_all(&dir).map_err(|e| format!("{dir}: {e}"))?;

@@ -35,8 +35,8 @@ fn fixture_dataset(out: &Path) {
             let seq = Sequence {
                 image_size: 8,
                 joints: (0..steps).map(|k| [k as f32 * 0.25 - 1.0; 7]).collect(),
-                endpoint: (0..steps).map(|k| [k as f32; 7]).collect(),
-                object: (0..steps).map(|_| [0.1, -0.2, 0.9]).collect(),
+                endpoint: Some((0..steps).map(|k| [k as f32; 7]).collect()),
+                object: Some((0..steps).map(|_| [0.1, -0.2, 0.9]).collect()),
                 frames: (0..steps * 8 * 8 * 3)
                     .map(|i| (i * 13 % 251) as u8)
                     .collect(),
@@ -56,7 +56,7 @@ fn inspect_prints_a_summary() {
     let stdout = text(&out.stdout);
     assert!(out.status.success(), "stderr: {}", text(&out.stderr));
     assert!(
-        stdout.contains("4 sequences, 2 ids, frames 8x8"),
+        stdout.contains("4 sequences, 2 ids, 7 joint values a step, frames 8x8"),
         "{stdout}"
     );
     assert!(stdout.contains("grasp"), "{stdout}");
@@ -181,7 +181,7 @@ fn simulate_is_reproducible_and_inspectable() {
     let stdout = text(&out.stdout);
     assert!(out.status.success(), "stderr: {}", text(&out.stderr));
     assert!(
-        stdout.contains("4 sequences, 2 ids, frames 64x64"),
+        stdout.contains("4 sequences, 2 ids, 7 joint values a step, frames 64x64"),
         "{stdout}"
     );
 }

@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 
 use dmbn::data::{
     joint_path, object_path, read_sequence, read_sequence_from, write_sequence, DataError, Dataset,
-    DatasetWriter, MemoryFiles, Sequence, Summary,
+    DatasetWriter, Joints, MemoryFiles, Sequence, Summary,
 };
 use image::codecs::jpeg::JpegEncoder;
 use image::codecs::png::PngEncoder;
@@ -59,8 +59,8 @@ fn fixture(steps: usize, size: u32, salt: u32) -> Sequence {
     Sequence {
         image_size: size,
         joints,
-        endpoint,
-        object,
+        endpoint: Some(endpoint),
+        object: Some(object),
         frames,
     }
 }
@@ -252,7 +252,7 @@ fn frame_of_wrong_size_is_reported() {
         &err,
         &[
             &bad.display().to_string(),
-            "expected a 8x8 frame, found 8x6",
+            "expected a 8x8 frame (as the sequence's first), found 8x6",
         ],
     );
 }
@@ -396,7 +396,10 @@ fn dataset_writer_builds_in_a_temporary_folder() {
     assert_eq!(summary.actions["grasp"].min_len, 2);
     assert_eq!(summary.actions["grasp"].max_len, 4);
     let text = summary.to_string();
-    assert!(text.contains("3 sequences, 2 ids, frames 8x8"), "{text}");
+    assert!(
+        text.contains("3 sequences, 2 ids, 7 joint values a step, frames 8x8"),
+        "{text}"
+    );
 }
 
 #[test]
@@ -444,10 +447,12 @@ fn inconsistent_sequences_are_not_written() {
     let err = write_sequence(root.path(), 1, "grasp", &seq).unwrap_err();
     assert_message(&err, &["sequence 1 (grasp)", "frame bytes"]);
     let mut seq = fixture(3, 8, 0);
-    seq.object.pop();
+    seq.object.as_mut().unwrap().pop();
     assert!(write_sequence(root.path(), 1, "grasp", &seq).is_err());
     let mut seq = fixture(3, 8, 0);
-    seq.joints[1][2] = f32::NAN;
+    let mut values = seq.joints.values().to_vec();
+    values[seq.joints.width() + 2] = f32::NAN;
+    seq.joints = Joints::new(seq.joints.width(), values).unwrap();
     assert!(write_sequence(root.path(), 1, "grasp", &seq).is_err());
     let err = write_sequence(root.path(), 1, "../up", &fixture(1, 8, 0)).unwrap_err();
     assert!(matches!(err, DataError::ActionName { .. }));
@@ -493,7 +498,7 @@ fn folder_in_memory_reads_as_on_disk() {
         assert_eq!(m.dir, Path::new("mine/8").join(&d.action));
         for size in [None, Some(8)] {
             assert_eq!(
-                read_sequence_from(&files, &m.dir, m.id, size).unwrap(),
+                read_sequence_from(&files, &m.dir, m.id, None, size).unwrap(),
                 disk.read(d, size).unwrap()
             );
         }
@@ -501,7 +506,7 @@ fn folder_in_memory_reads_as_on_disk() {
     // Without the bytes, listing works and reading names the file.
     let listed = in_memory(root.path(), "mine", false);
     assert_eq!(Dataset::list(&listed, "mine").unwrap().len(), 2);
-    assert!(read_sequence_from(&listed, Path::new("mine/8/grasp"), 8, None).is_err());
+    assert!(read_sequence_from(&listed, Path::new("mine/8/grasp"), 8, None, None).is_err());
 }
 
 #[test]
@@ -530,7 +535,7 @@ fn folder_in_memory_reports_the_disk_errors() {
         break_it(&dir);
         let disk = read_sequence(&dir, 8, None).unwrap_err().to_string();
         let files = in_memory(root.path(), "mine", true);
-        let memory = read_sequence_from(&files, Path::new("mine/8/grasp"), 8, None)
+        let memory = read_sequence_from(&files, Path::new("mine/8/grasp"), 8, None, None)
             .unwrap_err()
             .to_string();
         let prefix = format!("{}", root.path().display());

@@ -8,7 +8,7 @@ use std::process::Command;
 use std::sync::{Mutex, MutexGuard};
 
 use burn::tensor::Device;
-use dmbn::data::Normalization;
+use dmbn::data::{Normalization, JOINTS};
 use dmbn::eval::{
     diverged, evenly_spaced, fit_head, mean_ci95, split_warnings, time_variance, Divergence,
     HeadConfig, ProbeReport, ProbeResult, ProbeRow, StepEncodings, DIVERGENCE_FACTOR,
@@ -246,7 +246,7 @@ fn dmbn_eval_and_probe_run_end_to_end() {
     for kind in ModelKind::ALL {
         let path = tmp.path().join(format!("{kind}.dmbn"));
         let m = ModelConfig::new(kind).init(&device).unwrap();
-        support::save_model(&path, &m, &Normalization::identity(), true);
+        support::save_model(&path, &m, &Normalization::identity(JOINTS), true);
         paths.push(path.to_str().unwrap().to_string());
     }
     let d = data.to_str().unwrap();
@@ -463,7 +463,7 @@ fn dmbn_probe_tests_on_an_id_range_or_a_second_dataset() {
     for kind in [ModelKind::Dmbn, ModelKind::Pte] {
         let path = tmp.path().join(format!("{kind}.dmbn"));
         let m = ModelConfig::new(kind).init(&device).unwrap();
-        support::save_model(&path, &m, &Normalization::identity(), true);
+        support::save_model(&path, &m, &Normalization::identity(JOINTS), true);
         paths.push(path.to_str().unwrap().to_string());
     }
     let (d, o) = (data.to_str().unwrap(), other.to_str().unwrap());

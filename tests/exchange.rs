@@ -391,6 +391,7 @@ fn the_pytorch_twin_predicts_what_dmbn_predict_does() {
                 let array = |name: &str| support::f32_values(name, &file.tensor(name).unwrap());
                 let prediction = dmbn::predict::SequencePrediction {
                     image_size: 64,
+                    joints: dmbn::data::JOINTS,
                     times: Vec::new(),
                     image_mean: array("image_mean"),
                     image_sigma: array("image_sigma"),

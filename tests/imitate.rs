@@ -18,7 +18,8 @@ use dmbn::quality::MeanMotion;
 use dmbn::sim::{episode, perform, Action, Outcome, PushMiss, SimError, Simulator, Trajectory};
 
 fn object(demo: &Sequence) -> [f32; 2] {
-    [demo.object[0][0], demo.object[0][1]]
+    let object = demo.object.as_ref().unwrap();
+    [object[0][0], object[0][1]]
 }
 
 #[test]
@@ -40,11 +41,10 @@ fn replaying_the_recorded_joints_reproduces_the_outcome() {
 #[test]
 fn performing_is_deterministic_and_starts_at_the_first_row() {
     let demo = episode(Action::Grasp, 3, 64).unwrap();
-    let t = Trajectory::new(demo.joints.clone()).unwrap();
+    let t = Trajectory::new(support::fixed_rows(&demo.joints)).unwrap();
     let a = perform(&t, object(&demo), 64).unwrap();
-    let b = Simulator::performing(&t, demo.object[0][0], demo.object[0][1], 64)
-        .unwrap()
-        .run();
+    let [x, y] = object(&demo);
+    let b = Simulator::performing(&t, x, y, 64).unwrap().run();
     assert_eq!(a.digest(), b.digest());
     assert_eq!(a.joints[0][..6], demo.joints[0][..6]);
     assert_eq!(a.frame(0), demo.frame(0), "same start, same scene");
@@ -54,8 +54,7 @@ fn performing_is_deterministic_and_starts_at_the_first_row() {
 fn wrong_trajectories_fail_their_outcome() {
     // A grasp whose gripper never closes, and a push that never leaves home.
     let demo = episode(Action::Grasp, 5, 64).unwrap();
-    let open: Vec<[f32; 7]> = demo
-        .joints
+    let open: Vec<[f32; 7]> = support::fixed_rows(&demo.joints)
         .iter()
         .map(|r| {
             let mut r = *r;
@@ -70,7 +69,7 @@ fn wrong_trajectories_fail_their_outcome() {
     assert_eq!(o.push_error_cm, None, "a grasp has no push direction");
 
     let demo = episode(Action::Move, 5, 64).unwrap();
-    let home = vec![demo.joints[0]; demo.len()];
+    let home = vec![support::fixed_rows(&demo.joints)[0]; demo.len()];
     let p = perform(&Trajectory::new(home).unwrap(), object(&demo), 64).unwrap();
     let o = Outcome::judge(Action::Move, &p, &demo).unwrap();
     assert!(!o.success && o.object_error_cm > 5.0, "{o:?}");
@@ -88,13 +87,13 @@ fn wrong_trajectories_fail_their_outcome() {
 #[test]
 fn bad_trajectories_and_placements_are_errors() {
     let demo = episode(Action::Move, 2, 64).unwrap();
-    let mut rows = demo.joints.clone();
+    let mut rows = support::fixed_rows(&demo.joints);
     rows[3][1] = f32::NAN;
     let err = Trajectory::new(rows).unwrap_err().to_string();
     assert!(err.contains("row 3, column 1 is NaN"), "{err}");
     let err = Trajectory::from_flat(&[0.0; 20]).unwrap_err().to_string();
     assert!(err.contains("20 values"), "{err}");
-    let t = Trajectory::new(demo.joints.clone()).unwrap();
+    let t = Trajectory::new(support::fixed_rows(&demo.joints)).unwrap();
     assert!(matches!(
         perform(&t, [2.0, 0.5], 64),
         Err(SimError::ObjectOutOfRegion { .. })
@@ -113,9 +112,9 @@ fn frames_only_imitation_never_reads_the_observed_joints() {
         .unwrap()
         .unwrap();
     let mut blind = demo.clone();
-    for row in &mut blind.joints {
-        *row = [1.0, -1.0, 0.5, 0.0, 2.0, -2.0, -0.1];
-    }
+    blind.joints = (0..blind.len())
+        .map(|_| [1.0, -1.0, 0.5, 0.0, 2.0, -2.0, -0.1])
+        .collect();
     let b = imitate(&predictor, &blind, Action::Grasp, Task::Frames, 5, 1.0)
         .unwrap()
         .unwrap();
@@ -136,9 +135,10 @@ fn finish_performs_the_observed_part_as_recorded() {
         .unwrap()
         .unwrap();
     let from = f.predicted_from;
+    let recorded = support::fixed_rows(&demo.joints);
     assert_eq!(from, f.observed.last().unwrap() + 1);
-    assert_eq!(f.trajectory[..from], demo.joints[..from]);
-    assert_ne!(f.trajectory[from..], demo.joints[from..]);
+    assert_eq!(f.trajectory[..from], recorded[..from]);
+    assert_ne!(f.trajectory[from..], recorded[from..]);
     assert_eq!(f.joint_steps, demo.len() - from);
     // The floor: the mean motion of a set of pushes after the same recorded part.
     let set: Vec<Sequence> = (30..36)
@@ -148,7 +148,7 @@ fn finish_performs_the_observed_part_as_recorded() {
     let floor = mean_motion(&demo, Action::Move, Task::Finish, 5, &mean)
         .unwrap()
         .unwrap();
-    assert_eq!(floor.trajectory[..from], demo.joints[..from]);
+    assert_eq!(floor.trajectory[..from], recorded[..from]);
     assert!(floor.observed.is_empty());
     let grasps = MeanMotion::fit(set.iter().map(|s| ("grasp", s))).unwrap();
     let err = mean_motion(&demo, Action::Move, Task::Finish, 5, &grasps).unwrap_err();
@@ -164,12 +164,13 @@ fn noisy_replays_err_by_the_rmse_asked_for() {
         .unwrap();
     let ceiling = replay(&demo, Action::Move).unwrap();
     assert_eq!(exact.performance.digest(), ceiling.performance.digest());
+    let recorded = support::fixed_rows(&demo.joints);
     for task in Task::ALL {
         let n = with_noise(&demo, Action::Move, task, 5, 0.02, 1)
             .unwrap()
             .unwrap();
         let from = n.predicted_from;
-        assert_eq!(n.trajectory[..from], demo.joints[..from], "{task}");
+        assert_eq!(n.trajectory[..from], recorded[..from], "{task}");
         assert!(
             (n.joint_rmse() - 0.02).abs() < 1e-4,
             "{task}: {}",
@@ -212,7 +213,7 @@ fn rows_say_how_pushes_missed_and_which_joint_erred() {
     let good = replay(&demo, Action::Move).unwrap();
     // The base joint 0.08 rad off at every step, the other joints as recorded: the finger
     // meets the object off its centre and knocks it aside (measured: 9.9 cm to the right).
-    let mut rows = demo.joints.clone();
+    let mut rows = support::fixed_rows(&demo.joints);
     rows.iter_mut().for_each(|r| r[0] -= 0.08);
     let turned = enact(&demo, Action::Move, rows, Vec::new()).unwrap();
     let e = turned.outcome.push_error_cm.unwrap();
@@ -222,7 +223,7 @@ fn rows_say_how_pushes_missed_and_which_joint_erred() {
     let home = enact(
         &demo,
         Action::Move,
-        vec![demo.joints[0]; demo.len()],
+        vec![support::fixed_rows(&demo.joints)[0]; demo.len()],
         vec![],
     )
     .unwrap();
@@ -403,7 +404,7 @@ fn dmbn_imitate_names_an_object_it_cannot_place() {
     let tmp = tempfile::tempdir().unwrap();
     let data = tmp.path().join("data");
     let mut demo = episode(Action::Grasp, 1, 64).unwrap();
-    for o in &mut demo.object {
+    for o in demo.object.as_mut().unwrap() {
         o[0] = 1.5;
     }
     let mut writer = dmbn::data::DatasetWriter::create(&data).unwrap();

@@ -6,7 +6,7 @@
 mod support;
 
 use burn::tensor::Device;
-use dmbn::data::{Sequence, JOINTS};
+use dmbn::data::{Joints, Sequence, JOINTS};
 use dmbn::model::{self, Mirror, MirrorConfig, ModelError};
 use dmbn::predict::{Observations, Predictor};
 use dmbn::sim::{episode, Action};
@@ -36,7 +36,7 @@ fn network_only() -> Predictor {
     Predictor::from_bytes(&shipped_with(None)).unwrap()
 }
 
-fn interpolate(times: &[f32], reads: &[[f32; JOINTS]], t: f32) -> [f32; JOINTS] {
+fn interpolate(times: &[f32], reads: &Joints, t: f32) -> [f32; JOINTS] {
     let i = times.partition_point(|&s| s <= t).clamp(1, times.len() - 1);
     let w = ((t - times[i - 1]) / (times[i] - times[i - 1])).clamp(0.0, 1.0);
     std::array::from_fn(|j| reads[i - 1][j] + w * (reads[i][j] - reads[i - 1][j]))
@@ -105,7 +105,7 @@ fn the_page_s_default_model_ships_with_a_stage_that_corrects_its_network() {
         plain.predict_joints(&observed, &times, 1.0).unwrap(),
     );
     let apart = a
-        .iter()
+        .rows()
         .zip(&b)
         .flat_map(|(x, y)| x.iter().zip(y))
         .map(|(x, y)| (x - y).abs());
@@ -184,7 +184,7 @@ fn interpolation_mse(examples: &MirrorExamples) -> f64 {
 fn fitting_the_stage_lowers_the_error_of_the_interpolated_reads() {
     let plain = network_only();
     let mut rng = rand_pcg::Pcg64::seed_from_u64(3);
-    let mut examples = MirrorExamples::default();
+    let mut examples = MirrorExamples::new(JOINTS);
     let demos: Vec<Sequence> = (0..4)
         .flat_map(|i| Action::ALL.map(|a| episode(a, 800 + i, 64).unwrap()))
         .collect();
@@ -219,7 +219,7 @@ fn fitting_the_stage_lowers_the_error_of_the_interpolated_reads() {
         last.rmse
     );
     assert_eq!(mirror.width(), 32);
-    let empty = MirrorExamples::default();
+    let empty = MirrorExamples::new(JOINTS);
     let err = fit_mirror(&empty, None, fit, &Device::flex().autodiff(), |_| {}).unwrap_err();
     assert!(err.to_string().contains("no training examples"), "{err}");
 }

@@ -8,7 +8,7 @@ use std::sync::Mutex;
 use burn::optim::{AdamConfig, GradientsParams};
 use burn::tensor::{Device, Tensor, TensorData};
 use dmbn::augment::Batch;
-use dmbn::data::write_atomic;
+use dmbn::data::{write_atomic, JOINTS};
 use dmbn::model::{
     file, load_bytes, load_bytes_expecting, read_header, save_bytes, tensors,
     with_joint_sigma_scale, BatchTensors, JointSigmaScale, Model, ModelConfig, ModelError,
@@ -47,6 +47,7 @@ fn batch(b: usize, n: usize, m: usize, s: usize, seed: u64) -> Batch {
         contexts: n,
         targets: m,
         image_size: s,
+        joints: 7,
         context_images: rng.fill(b * n * 3 * s * s, 1.0, 0.0),
         context_joints: rng.fill(b * n * 7, 2.0, -1.0),
         context_times: rng.fill(b * n, 1.0, 0.0),
@@ -293,7 +294,7 @@ fn loss_is_finite_and_falls_when_overfitting_one_batch() {
 fn saved(kind: ModelKind, half: bool) -> (Model, Vec<u8>, Normalization) {
     let device = device();
     let model = model(kind, 64, &device);
-    let mut normalization = Normalization::identity();
+    let mut normalization = Normalization::identity(JOINTS);
     normalization.mean[0] = 0.5;
     normalization.std[6] = 0.03;
     let bytes = save_bytes(&model, &normalization, half).unwrap();
@@ -378,7 +379,7 @@ fn narrow_image_networks_are_saved_with_their_filters() {
         .with_decoder_filters(Some(narrow.clone()))
         .with_encoder_filters(Some(encoder.clone()));
     let model = init(config, &device);
-    let bytes = save_bytes(&model, &Normalization::identity(), false).unwrap();
+    let bytes = save_bytes(&model, &Normalization::identity(JOINTS), false).unwrap();
     let (_, full, _) = saved(ModelKind::Attn, false);
     assert!(
         bytes.len() < full.len(),
@@ -426,7 +427,7 @@ fn a_coarse_tail_is_saved_with_the_model_and_decodes_full_size_frames() {
     let fine = ModelConfig::new(ModelKind::Attn).with_decoder_filters(filters);
     let coarse = fine.clone().with_coarse_tail(Some(true));
     let model = init(coarse, &device);
-    let bytes = save_bytes(&model, &Normalization::identity(), false).unwrap();
+    let bytes = save_bytes(&model, &Normalization::identity(JOINTS), false).unwrap();
     let (config, (t, p)) = reads_back_exactly(&model, &bytes, &device);
     assert_eq!(config.coarse_tail, Some(true));
     // The same weights read as a fine tail (the header's flag dropped) decode other frames:
@@ -488,7 +489,7 @@ fn frame_joints_start_frames_only_predictions_from_the_joints_read() {
             "blend {blend}"
         );
     }
-    let bytes = save_bytes(&read, &Normalization::identity(), false).unwrap();
+    let bytes = save_bytes(&read, &Normalization::identity(JOINTS), false).unwrap();
     let (config, _) = reads_back_exactly(&read, &bytes, &device);
     assert_eq!(config.frame_joints, Some(true));
     // DMBN-PTE has no attention to start from what it reads.
@@ -511,8 +512,8 @@ fn a_joint_sigma_scale_multiplies_the_joint_sigma() {
     let device = device();
     let model = model(ModelKind::Pte, 64, &device);
     let norm = Normalization {
-        mean: [0.1; 7],
-        std: [0.5; 7],
+        mean: vec![0.1; 7],
+        std: vec![0.5; 7],
     };
     let bytes = save_bytes(&model, &norm, false).unwrap();
     let scale = |between: f32, forecast: Option<f32>| JointSigmaScale { between, forecast };

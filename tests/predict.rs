@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 use burn::tensor::Device;
-use dmbn::data::{Dataset, DatasetWriter, Normalization, Sequence};
+use dmbn::data::{Dataset, DatasetWriter, Normalization, Sequence, JOINTS};
 use dmbn::model::{ModelConfig, ModelError, ModelKind};
 use dmbn::predict::{heat_map, heat_map_rgb, Observations, Predictor, SequencePrediction};
 use dmbn::sim::{episode, Action};
@@ -59,7 +59,7 @@ fn every_predictor_has_frozen_kernels() {
     let device = Device::flex();
     let model = ModelConfig::new(ModelKind::Pte).init(&device).unwrap();
     assert!(!model.kernels_frozen());
-    assert!(Predictor::new(model, Normalization::identity())
+    assert!(Predictor::new(model, Normalization::identity(JOINTS))
         .model()
         .kernels_frozen());
 }
@@ -181,7 +181,7 @@ fn fresh(kind: ModelKind, image_size: usize) -> Predictor {
         .with_image_size(image_size)
         .init(&device)
         .unwrap();
-    Predictor::new(model, Normalization::identity())
+    Predictor::new(model, Normalization::identity(JOINTS))
 }
 
 fn message(err: ModelError) -> String {
@@ -314,7 +314,7 @@ fn dmbn_predict_writes_figures_and_scores() {
     let model_path = tmp.path().join("model.dmbn");
     let device = Device::flex();
     let model = ModelConfig::new(ModelKind::Dmbn).init(&device).unwrap();
-    support::save_model(&model_path, &model, &Normalization::identity(), true);
+    support::save_model(&model_path, &model, &Normalization::identity(JOINTS), true);
     let seq = episode(Action::Grasp, 11, 64).unwrap();
     let (data, out, run) = predict_grasp(tmp.path(), &model_path, &seq);
     let (m, d, o) = (

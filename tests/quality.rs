@@ -10,7 +10,7 @@ mod support;
 use std::path::Path;
 use std::process::Command;
 
-use dmbn::data::{Normalization, Sequence};
+use dmbn::data::{Normalization, Sequence, JOINTS};
 
 use dmbn::predict::Predictor;
 use dmbn::quality::{score_sequence, MeanMotion, Scenario};
@@ -108,7 +108,7 @@ fn uses_its_observations(names: &[&str]) {
     let (seqs, mean) = (unseen(), mean_motion());
     for &name in names {
         let predictor = Predictor::load(support::asset(&format!("models/{name}.dmbn"))).unwrap();
-        let fresh = support::untrained(predictor.model().kind(), Normalization::identity());
+        let fresh = support::untrained(predictor.model().kind(), Normalization::identity(JOINTS));
         support::assert_uses_its_observations(name, &predictor, &fresh, &seqs, &mean);
     }
 }

@@ -342,9 +342,9 @@ fn baseline(seq: &dmbn::data::Sequence, observed: &[usize], k: usize) -> (usize,
     }
     let (first, last) = (observed[0], *observed.last().unwrap());
     let joints = if k <= first {
-        seq.joints[first]
+        seq.joints[first].try_into().unwrap()
     } else if k >= last {
-        seq.joints[last]
+        seq.joints[last].try_into().unwrap()
     } else {
         let after = observed.iter().position(|&o| o >= k).unwrap();
         let (a, b) = (observed[after - 1], observed[after]);
@@ -362,7 +362,7 @@ fn nll(x: f64, m: f64, s: f64) -> f64 {
 #[test]
 fn a_plain_reference_reproduces_the_golden_scores() {
     let predictor = Predictor::from_bytes(golden_score::MODEL).unwrap();
-    let std = predictor.normalization().std;
+    let std = predictor.normalization().std.clone();
     let seq = episode(Action::Grasp, golden_score::SEED, 64).unwrap();
     let (len, px) = (seq.len(), seq.frame_bytes());
     let expected = golden_score::expected();

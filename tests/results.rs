@@ -124,7 +124,7 @@ fn original_data_weights_use_their_observations_on_held_out_ids() {
     let (held, mean) = held_out(&data);
     for name in ["attn-2020", "dmbn-2020", "pte-2020", "pte-aug-2020"] {
         let predictor = shipped(name);
-        let fresh = support::untrained(predictor.model().kind(), *predictor.normalization());
+        let fresh = support::untrained(predictor.model().kind(), predictor.normalization().clone());
         support::assert_uses_its_observations(name, &predictor, &fresh, &held, &mean);
     }
 }
@@ -231,7 +231,7 @@ fn original_data_weights_draw_simulated_scenes_better_than_untrained_models() {
     for name in ["attn-2020", "dmbn-2020", "pte-2020", "pte-aug-2020"] {
         let predictor = shipped(name);
         let kind = predictor.model().kind();
-        let fresh = support::untrained(kind, *predictor.normalization());
+        let fresh = support::untrained(kind, predictor.normalization().clone());
         let (model, _, _) = support::measure(&predictor, &seqs, Scenario::Interp, &mean);
         let (untrained, _, _) = support::measure(&fresh, &seqs, Scenario::Interp, &mean);
         let (what, got, fresh) = if kind == ModelKind::Attn {

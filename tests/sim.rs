@@ -16,7 +16,7 @@ fn same_seed_same_episode_and_placement_is_reproducible() {
         let a = episode(action, 11, 64).unwrap();
         let b = episode(action, 11, 64).unwrap();
         assert_eq!(a, b);
-        let [x, y, _] = a.object[0];
+        let [x, y, _] = a.object.as_ref().unwrap()[0];
         let c = Simulator::with_object(action, x, y, 11, 64).unwrap().run();
         assert_eq!(
             a.digest(),
@@ -42,16 +42,17 @@ fn lengths_in_the_originals_range() {
 fn grasp_lifts_the_object_and_move_pushes_it() {
     for seed in 0..6 {
         let g = episode(Action::Grasp, seed, 64).unwrap();
-        let (first, last) = (g.object[0], *g.object.last().unwrap());
+        let object = g.object.as_ref().unwrap();
+        let (first, last) = (object[0], *object.last().unwrap());
         assert!(
             last[2] > 0.15,
             "grasp seed {seed}: object ends at z = {}",
             last[2]
         );
         assert_eq!(g.joints[0][6], 0.0, "gripper starts open");
-        assert!(g.joints.last().unwrap()[6] < -0.005, "gripper ends closed");
+        assert!(g.joints[g.len() - 1][6] < -0.005, "gripper ends closed");
         // The object rises with the grasp point (held, not teleported).
-        let tcp = g.endpoint.last().unwrap();
+        let tcp = g.endpoint.as_ref().unwrap().last().unwrap();
         assert!(
             (tcp[2] - last[2]).abs() < 0.03,
             "object follows the fingers"
@@ -59,7 +60,8 @@ fn grasp_lifts_the_object_and_move_pushes_it() {
         assert!((first[2] - OBJECT_HALF_HEIGHT).abs() < 1e-3);
 
         let m = episode(Action::Move, seed, 64).unwrap();
-        let (first, last) = (m.object[0], *m.object.last().unwrap());
+        let object = m.object.as_ref().unwrap();
+        let (first, last) = (object[0], *object.last().unwrap());
         let moved = ((last[0] - first[0]).powi(2) + (last[1] - first[1]).powi(2)).sqrt();
         assert!(moved > 0.05, "move seed {seed}: object moved {moved} m");
         assert!(
@@ -67,7 +69,7 @@ fn grasp_lifts_the_object_and_move_pushes_it() {
             "object stays upright on the table"
         );
         assert!(
-            m.joints.iter().all(|j| j[6].abs() < 0.02),
+            m.joints.rows().all(|j| j[6].abs() < 0.02),
             "move keeps the gripper open"
         );
     }
@@ -76,7 +78,8 @@ fn grasp_lifts_the_object_and_move_pushes_it() {
 #[test]
 fn joints_and_endpoint_are_finite_and_in_range() {
     let seq = episode(Action::Move, 3, 64).unwrap();
-    for row in seq.joints.iter().chain(seq.endpoint.iter()) {
+    let endpoint = seq.endpoint.as_ref().unwrap();
+    for row in seq.joints.rows().chain(endpoint.iter().map(|r| &r[..])) {
         assert!(row.iter().all(|v| v.is_finite()));
     }
     for row in &seq.joints {

@@ -15,7 +15,7 @@ use burn::module::{Module, ModuleMapper, Param};
 use burn::optim::GradientsParams;
 use burn::tensor::{Device, Tensor};
 use dmbn::augment::{Batch, JointTargets, Sampler, SamplerConfig};
-use dmbn::data::{Dataset, DatasetWriter, JointScale, Normalization};
+use dmbn::data::{Dataset, DatasetWriter, JointScale, Normalization, JOINTS};
 use dmbn::model::{
     export_safetensors, import_file, joint_nll, joint_target_tensors, save_bytes, tensors,
     LossValues, Model, ModelConfig, ModelKind,
@@ -116,7 +116,7 @@ fn the_twin_reads_a_dataset_as_the_rust_reader_does() {
         } else {
             assert_eq!(off, 0, "{size} px frames differ");
         }
-        let joints: Vec<f32> = seq.joints.iter().flatten().copied().collect();
+        let joints: Vec<f32> = seq.joints.values().to_vec();
         assert_eq!(joints, twin["joints"]);
     }
     // The joint normalisation, fitted per joint or with the arm's one scale.
@@ -125,7 +125,7 @@ fn the_twin_reads_a_dataset_as_the_rust_reader_does() {
         (JointScale::PerJoint, "per-joint"),
         (JointScale::Shared, "shared"),
     ] {
-        let ours = Normalization::fit(&seq.joints).scaled(scale).std;
+        let ours = Normalization::fit(JOINTS, &seq.joints).scaled(scale).std;
         let theirs = &twin[&format!("std_{name}")];
         assert!(
             max_diff(&ours, theirs) < 1e-6,
@@ -169,7 +169,7 @@ fn step_gradients(
         let mse = (drawn.clone() - frames.clone()).square().mean();
         loss.total = loss.total + mse.mul_scalar(DRAWN_FRAME_WEIGHT);
     }
-    let (times, joints) = joint_target_tensors(joint_targets, device).unwrap();
+    let (times, joints) = joint_target_tensors(joint_targets, JOINTS, device).unwrap();
     let (mean, sigma) = model.decode_joints(&representation, times).unwrap();
     loss.total = loss.total + joint_nll(mean, sigma, joints, BETA).mul_scalar(JOINT_WEIGHT);
     let values = loss.values();
@@ -193,7 +193,7 @@ fn the_twin_computes_the_loss_and_gradients_the_rust_trainer_does() {
         .iter()
         .map(|s| dataset.read(s, Some(64)).unwrap())
         .collect();
-    let normalization = Normalization::fit(pool.iter().flat_map(|s| s.joints.iter()));
+    let normalization = Normalization::fit(JOINTS, pool.iter().flat_map(|s| s.joints.rows()));
     let sampler = Sampler::new(SamplerConfig {
         batch: 2,
         max_contexts: 3,
@@ -411,7 +411,7 @@ fn two_ddp_processes_take_the_steps_of_one_a_resumed_run_too_and_dmbn_imports_th
         .iter()
         .map(|s| dataset.read(s, Some(64)).unwrap())
         .collect();
-    let fitted = Normalization::fit(training.iter().flat_map(|s| s.joints.iter()));
+    let fitted = Normalization::fit(JOINTS, training.iter().flat_map(|s| s.joints.rows()));
     assert_eq!(header.config.kind, ModelKind::Pte);
     for (x, y) in header.normalization.mean.iter().zip(fitted.mean) {
         assert!((x - y).abs() <= 1e-6 * y.abs().max(1.0), "{x} vs {y}");

@@ -513,7 +513,14 @@ fn forecast_error_scores_drawn_frames_and_names_bad_layouts() {
     let ep = grasp7();
     let (frames, joints) = (ep.frames(), ep.joints());
     let forecast_error = |true_frames: &[u8], frames: &[u8]| {
-        dmbn::web::forecast_error(u8s(true_frames), f32s(&joints), u8s(frames), f32s(&joints))
+        // No joint count: the simulator arm's 7, as the page passed them before it had one.
+        dmbn::web::forecast_error(
+            u8s(true_frames),
+            f32s(&joints),
+            u8s(frames),
+            f32s(&joints),
+            JsValue::UNDEFINED,
+        )
     };
     let quality = |value: JsValue| -> dmbn::quality::Quality {
         serde_wasm_bindgen::from_value(value).expect("the fields of dmbn score --json")

@@ -1,8 +1,10 @@
 // What a change of settings does: once a prediction has been asked for, predict again (live
-// mode: forecast again), otherwise drop the outdated prediction.
+// mode: forecast again), otherwise drop the outdated prediction (and say so when the chosen
+// model cannot read the episode's joints).
 
 import { render } from "./draw.js";
 import { forecastNow } from "./live.js";
+import { jointMismatch, refuse } from "./models.js";
 import { updateObsInfo } from "./observations.js";
 import { cancelPrediction, predict } from "./prediction.js";
 import { state } from "./state.js";
@@ -20,7 +22,10 @@ export function invalidate() {
   } else {
     cancelPrediction();
     render();
-    settle();
+    // A model of another number of joint values a step than the episode's: the page says so.
+    const why = jointMismatch();
+    if (why) refuse(why);
+    else settle();
   }
 }
 

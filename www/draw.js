@@ -4,7 +4,7 @@
 import { redrawErrors } from "./error_plot.js";
 import { log } from "./hooks.js";
 import { clampInt, observedSteps } from "./observations.js";
-import { drawJoints } from "./plot.js";
+import { defaultJointNames, drawJoints } from "./plot.js";
 import { heldForecast, state } from "./state.js";
 import { ui } from "./ui.js";
 import { clearFrame, drawTable, drawTimeline, rgbImage } from "./views.js";
@@ -70,6 +70,7 @@ export function render() {
   if (live) redrawErrors();
   state.stepAt = drawJoints(ui.plot, ui.plotCursor, {
     len: shown.len,
+    names: jointNames(shown.jointCount),
     joints: shown.joints,
     observed: (live && panels?.steps) || observedSteps(),
     step,
@@ -77,6 +78,15 @@ export function render() {
     labels: shown.mode === "imitate" ? { truth: "demonstrated", mean: "imagined mean" } : undefined,
   });
   if (p?.count) firstDrawn(p);
+}
+
+/**
+ * The names of the `d` joint values a step of the sequence on screen: the chosen model's
+ * (`Model.jointNames`) when it reads as many, otherwise the defaults (`joint 0`, …, `gripper`).
+ */
+function jointNames(d) {
+  const info = state.modelInfo.get(ui.model.value);
+  return info?.jointCount === d && info.jointNames?.length === d ? info.jointNames : defaultJointNames(d);
 }
 
 /** The true frame and the prediction of the step shown: predicted frame, ghost, σ map. */

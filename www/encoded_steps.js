@@ -5,13 +5,12 @@
 /** Steps kept at most (more only while a single forecast observes more). */
 export const LIMIT = 128;
 
-/** Joint values per step. */
-const JOINTS = 7;
-
 export class EncodedSteps {
   /** For `model`, a wasm Model, keeping at most `limit` steps. */
   constructor(model, limit = LIMIT) {
     this.model = model;
+    /** Joint values a step (D): the model's. */
+    this.jointCount = model.jointCount;
     this.limit = limit;
     /** The sequence the kept steps are of (the page's name for it). */
     this.source = null;
@@ -37,8 +36,11 @@ export class EncodedSteps {
    * Contexts for Model.represent, which the caller frees, and how many steps were encoded.
    */
   contextsOf(source, steps, frames, joints, times) {
-    if (steps.length !== times.length || joints.length !== steps.length * JOINTS) {
-      throw new Error(`predict: ${steps.length} steps for ${times.length} times and ${joints.length / JOINTS} joint rows: expected one observation per step`);
+    const d = this.jointCount;
+    if (steps.length !== times.length || joints.length !== steps.length * d) {
+      throw new Error(
+        `predict: ${steps.length} steps for ${times.length} times and ${joints.length / d} joint rows of ${d} values: expected one observation per step`,
+      );
     }
     if (source !== this.source) {
       this.forget();
@@ -58,7 +60,7 @@ export class EncodedSteps {
         missing.forEach((i, j) => out.set(values.subarray(i * width, (i + 1) * width), j * width));
         return out;
       };
-      const fresh = this.model.encodeContexts(pick(frames, px), pick(joints, JOINTS), pick(times, 1));
+      const fresh = this.model.encodeContexts(pick(frames, px), pick(joints, d), pick(times, 1));
       this.add(fresh, missing.map((i) => steps[i]));
     }
     const contexts = this.contexts.select(Uint32Array.from(steps, (s) => this.index.get(s)));

@@ -48,8 +48,10 @@ export function setEpisode(ep, { action, seed, placed, ms, folder }) {
   clearError();
   cancelPrediction();
   state.episode?.handle.free();
+  // A folder's data may have no object positions (no object_<id>.txt): then none is drawn.
   const object = ep.object();
   const len = ep.len;
+  const hasObject = object.length >= len * 3 && len > 0;
   const episode = {
     handle: ep,
     action,
@@ -57,8 +59,9 @@ export function setEpisode(ep, { action, seed, placed, ms, folder }) {
     placed,
     folder,
     len,
-    object: [object[0], object[1]],
-    end: [object[(len - 1) * 3], object[(len - 1) * 3 + 1]],
+    object: hasObject ? [object[0], object[1]] : null,
+    end: hasObject ? [object[(len - 1) * 3], object[(len - 1) * 3 + 1]] : null,
+    jointCount: ep.jointCount,
     joints: ep.joints(),
     digest: ep.digest(),
     ms,
@@ -124,7 +127,8 @@ export function buildShown() {
     images.push(rgbImage(frames, size, k * px));
     sg.putImageData(images[k], k * size, 0);
   }
-  state.shown = { id: ++shownCount, mode, len: ev.len, size, frames, joints: ev.joints(), times: ev.times(), images, sprite };
+  const { jointCount } = episode;
+  state.shown = { id: ++shownCount, mode, len: ev.len, size, frames, jointCount, joints: ev.joints(), times: ev.times(), images, sprite };
   ev.free();
   return true;
 }

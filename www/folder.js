@@ -6,7 +6,7 @@
 import { invalidate } from "./changes.js";
 import { IMAGE_SIZE, modelsOf } from "./config.js";
 import { generate, setEpisode } from "./episodes.js";
-import { loadModel, offerModels } from "./models.js";
+import { jointMismatch, loadModel, offerModels } from "./models.js";
 import { state } from "./state.js";
 import { setState, showError } from "./status.js";
 import { ui } from "./ui.js";
@@ -70,22 +70,36 @@ export async function readSequence(id, action) {
     folder.data = await fittingData(episode);
   }
   if (state.episode !== episode) return false;
-  if (offerModels(folder.data)) ui.model.dispatchEvent(new Event("change"));
-  else invalidate();
+  // No data's models read the folder's joint values: the models offered stay, and the page
+  // says why it predicts nothing (as it does for any model of another count).
+  if (folder.data === "none") {
+    const d = episode.jointCount;
+    ui.status.textContent = `The folder's sequences have ${d} joint values a step: none of the models offered reads ${d}.`;
+  }
+  if (folder.data !== "none" && (offerModels(folder.data) || jointMismatch())) {
+    // The data's models, or the chosen one reads another count: its default (which fits).
+    ui.model.value = modelsOf(folder.data)[0];
+    ui.model.dispatchEvent(new Event("change"));
+  } else invalidate();
   return true;
 }
 
 /**
- * The data whose models fit the folder: "2020" when the sequence's joints lie nearer the joint
- * normalisation of the models trained on the original DMBN data than of the simulator's (the
- * folder then holds the original data, or recordings like it), otherwise "sim". Loads the
- * default model of each (the one chosen next anyway).
+ * The data whose models fit the folder: among the data whose models read as many joint values
+ * a step as the sequence has (D, `Episode.jointCount`), "2020" when the sequence's joints lie
+ * nearer the joint normalisation of the models trained on the original DMBN data than of the
+ * simulator's (the folder then holds the original data, or recordings like it), otherwise
+ * "sim"; "none" when neither's do (another robot's data). Loads the default model of each (the
+ * one chosen next anyway).
  */
 async function fittingData(episode) {
-  const [sim, original] = await Promise.all(["sim", "2020"].map((data) => loadModel(modelsOf(data)[0])));
+  const defaults = await Promise.all(["sim", "2020"].map(async (data) => ({ data, info: await loadModel(modelsOf(data)[0]) })));
   if (state.episode !== episode) return null;
-  const distance = ({ normalization: n }) => episode.handle.jointDistance(Float32Array.from(n.mean), Float32Array.from(n.std));
-  return distance(original) < distance(sim) ? "2020" : "sim";
+  // Episode.jointDistance takes a normalisation of D values only.
+  const fitting = defaults.filter(({ info }) => info.jointCount === episode.jointCount);
+  if (!fitting.length) return "none";
+  const distance = ({ info: { normalization: n } }) => episode.handle.jointDistance(Float32Array.from(n.mean), Float32Array.from(n.std));
+  return fitting.reduce((best, d) => (distance(d) < distance(best) ? d : best)).data;
 }
 
 /** The Sequence select changed: the simulator (a new episode) or a sequence of the folder. */

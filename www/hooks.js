@@ -52,9 +52,13 @@ export function errorPlotHolds(canvas, byModel) {
   canvas.dataset.points = String([...byModel.values()].reduce((n, points) => n + points.length, 0));
 }
 
-/** `#joints-plot[data-columns]`: the panels per row (4, or 2 on a phone). */
-export function plotColumns(canvas, cols) {
+/**
+ * `#joints-plot[data-columns]`: the panels per row (4, or 2 on a phone); `[data-panels]`: the
+ * panels, one per joint value a step (D: 7 for the simulator's arm).
+ */
+export function plotGrid(canvas, cols, panels) {
   canvas.dataset.columns = String(cols);
+  canvas.dataset.panels = String(panels);
 }
 
 /**

@@ -5,6 +5,7 @@
 // judged in Rust against the demonstration — in a badge.
 
 import { performanceDone, performed, timings } from "./hooks.js";
+import { ARM_JOINTS } from "./plot.js";
 import { state } from "./state.js";
 import { showError } from "./status.js";
 import { ui } from "./ui.js";
@@ -15,9 +16,14 @@ const SEEN = { both: "frames and joints", images: "frames only", joints: "joints
 /**
  * Whether the arm can perform the episode on screen: a simulator episode, or a folder of
  * simulator data. The original DMBN data was recorded on a real arm whose joints the simulated
- * one does not share; its message otherwise.
+ * one does not share, and another robot's data has another number of joint values a step than
+ * the arm's 7; its message otherwise.
  */
 function performable() {
+  const count = state.episode?.jointCount;
+  if (state.episode?.folder && count !== ARM_JOINTS) {
+    return `The robot performs in the simulator, whose arm takes ${ARM_JOINTS} joint values a step, and this sequence has ${count}: imitate mode needs a simulator episode (the simulator, or a folder \`dmbn simulate\` wrote).`;
+  }
   if (state.episode?.folder && state.folder?.data === "2020") {
     return "The robot performs in the simulator, and this sequence is the original DMBN data, recorded on a real arm with other joints: imitate mode needs a simulator episode (the simulator, or a folder `dmbn simulate` wrote).";
   }
@@ -31,7 +37,7 @@ function performable() {
  */
 export function performImagined(p) {
   state.imagined = perform("imagined", () => {
-    const rows = p.jointMean.slice(0, p.len * 7);
+    const rows = p.jointMean.slice(0, p.len * ARM_JOINTS);
     return state.wasm.enact(state.episode.handle, state.episode.action, rows, Uint32Array.from(p.steps));
   });
   if (state.imagined) state.imagined.observe = p.observe;

@@ -7,10 +7,9 @@ import { CHUNK, MODEL_NAMES } from "./config.js";
 import { render, shownStep } from "./draw.js";
 import { curves, redrawErrors } from "./error_plot.js";
 import { comparisonEnded, seen, timings } from "./hooks.js";
-import { loadModel } from "./models.js";
+import { jointMismatch, loadModel } from "./models.js";
 import { clampInt, updateObsInfo } from "./observations.js";
 import { pause } from "./playback.js";
-import { JOINTS } from "./plot.js";
 import { ask, cancelPrediction, predict, prediction } from "./prediction.js";
 import { state } from "./state.js";
 import { settle, showError } from "./status.js";
@@ -76,12 +75,12 @@ function record(model, from, error) {
   redrawErrors();
 }
 
-/** The benchmark's error of forecast `p` over the steps it predicted (RGB bytes, joints). */
+/** The benchmark's error of forecast `p` over the steps it predicted (RGB bytes, joints: D a step). */
 function forecastError(p) {
-  const { sequence: shown, from } = p;
+  const { sequence: shown, from, jointCount: d } = p;
   const px = shown.size * shown.size * 3;
-  const truth = [shown.frames.subarray(from * px), shown.joints.subarray(from * JOINTS)];
-  return state.wasm.forecastError(...truth, p.mean.subarray(from * px), p.jointMean.subarray(from * JOINTS));
+  const truth = [shown.frames.subarray(from * px), shown.joints.subarray(from * d)];
+  return state.wasm.forecastError(...truth, p.mean.subarray(from * px), p.jointMean.subarray(from * d), d);
 }
 
 /** A live forecast finished (prediction.js, through main.js): its error, for the plot and for automation. */
@@ -142,6 +141,8 @@ export async function compareModels() {
   try {
     for (const model of [...ui.model.options].map((o) => o.value)) {
       await loadModel(model);
+      // A model of another number of joint values a step has no curve on this episode.
+      if (jointMismatch(model)) continue;
       for (const [i, last] of points.entries()) {
         if (stopped) return;
         ui.compareInfo.textContent = `${MODEL_NAMES[model]}: ${i + 1} / ${points.length}`;

@@ -9,7 +9,7 @@ import { expose, started, timings } from "./hooks.js";
 import { clearPerformances, performImagined } from "./imitate.js";
 import { Inference } from "./inference.js";
 import { follow, forecastDone, takeRule } from "./live.js";
-import { selectModel } from "./models.js";
+import { jointMismatch, refuse, selectModel } from "./models.js";
 import { pause } from "./playback.js";
 import { predict, timePrediction } from "./prediction.js";
 import { state } from "./state.js";
@@ -71,7 +71,10 @@ async function main() {
   if (!state.loadedModels.has(ui.model.value)) ui.status.textContent = `Loading the ${MODEL_NAMES[ui.model.value]} weights…`;
   if (await modelReady) {
     timings.ready_ms = performance.now();
-    settle();
+    // (A weight override of another robot's model: it cannot predict the simulator's episodes.)
+    const why = jointMismatch();
+    if (why) refuse(why);
+    else settle();
   }
 }
 

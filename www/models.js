@@ -8,8 +8,6 @@ import { ui } from "./ui.js";
 
 /** Model id → promise of the workers' report on its weights; a failure is dropped, to retry. */
 const requests = new Map();
-/** Model id → the first worker's report on its weights, once loaded. */
-const reports = new Map();
 
 /** Loads model `id` (a key of MODELS) into the workers once; resolves with the first worker's report. */
 export function loadModel(id) {
@@ -21,7 +19,7 @@ export function loadModel(id) {
           `The ${MODEL_NAMES[id]} weights (${WEIGHTS[id]}) are for ${info.imageSize}×${info.imageSize} frames; this page simulates ${IMAGE_SIZE}×${IMAGE_SIZE}.`,
         );
       }
-      reports.set(id, info);
+      state.modelInfo.set(id, info);
       timings.models[id] = info;
       state.loadedModels.add(id);
       return info;
@@ -34,7 +32,7 @@ export function loadModel(id) {
 }
 
 function describeModel(id) {
-  const info = reports.get(id);
+  const info = state.modelInfo.get(id);
   if (!info) return "";
   const file = decodeURIComponent(new URL(WEIGHTS[id]).pathname.split("/").pop());
   // The file should hold the kind of model the id names (pte-aug: a DMBN-PTE).
@@ -60,14 +58,46 @@ export async function selectModel() {
     return false;
   }
   if (ui.model.value !== id) return false;
-  clearError();
   ui.status.textContent = describeModel(id);
+  // A model of another robot's joints predicts nothing of this one's.
+  const why = jointMismatch(id);
+  if (why) {
+    refuse(why);
+    return false;
+  }
+  clearError();
   return true;
+}
+
+/**
+ * Why model `id` (the chosen one by default) cannot predict the episode on screen: it reads
+ * another number of joint values a step (D) than the episode has. Null when they agree, or
+ * while the model is not loaded (its count is not known yet: `selectModel` asks again).
+ */
+export function jointMismatch(id = ui.model.value, episode = state.episode) {
+  const info = state.modelInfo.get(id);
+  if (!info || !episode || info.jointCount === episode.jointCount) return null;
+  const data = episode.folder ? "the folder's sequences have" : "the simulator's episodes have";
+  return (
+    `The ${MODEL_NAMES[id]} model reads ${info.jointCount} joint values a step, ${data} ${episode.jointCount}: ` +
+    "choose a model trained on this robot."
+  );
+}
+
+/**
+ * Shows `why` (jointMismatch's message) in the error banner (state error) instead of
+ * predicting; once, however often it is asked again (live mode asks at every step it would
+ * forecast).
+ */
+export function refuse(why) {
+  if (!ui.error.hidden && ui.error.textContent === why) return;
+  showError(why);
 }
 
 /**
  * Offers the models trained on `data` ("sim" or "2020") in the Model select, the first chosen,
  * unless they are offered already. Says whether the choice changed (the caller then loads it).
+ * (A folder that no data's models fit keeps the models offered: folder.js.)
  */
 export function offerModels(data) {
   const ids = modelsOf(data);

@@ -1,16 +1,41 @@
-// The 7 joint curves as small multiples on one canvas: the true (shown) values, the predicted
-// mean with its ±2σ band as far as the prediction has come, the observed points and a cursor.
+// The joint curves as small multiples on one canvas, a panel for each of the D joint values a
+// step (the model's: 7 for the simulator's arm, 6 angles and the gripper): the true (shown)
+// values, the predicted mean with its ±2σ band as far as the prediction has come, the observed
+// points and a cursor.
 
-import { plotColumns } from "./hooks.js";
+import { plotGrid } from "./hooks.js";
 import { cssSize, fit, MUTED, panelFrame } from "./views.js";
 
-export const JOINTS = 7;
+/** Joint values a step of the simulator's arm (6 angles, gripper): the shipped models' D. */
+export const ARM_JOINTS = 7;
+/** The simulator arm's joints, in words and units, as the panels title them. */
 export const JOINT_NAMES = ["base", "shoulder", "elbow", "wrist 1", "wrist 2", "wrist 3", "gripper"];
 export const JOINT_UNITS = ["rad", "rad", "rad", "rad", "rad", "rad", "m"];
-export const JOINT_COLORS = ["#ff6b6b", "#ffa94d", "#ffd43b", "#69db7c", "#4dabf7", "#b197fc", "#f783ac"];
+/** A colour per joint value: the arm's 7, then more for robots with more (repeating past 12). */
+export const JOINT_COLORS = ["#ff6b6b", "#ffa94d", "#ffd43b", "#69db7c", "#4dabf7", "#b197fc", "#f783ac", "#63e6be", "#e599f7", "#ffc078", "#a9e34b", "#74c0fc"];
+const jointColor = (j) => JOINT_COLORS[j % JOINT_COLORS.length];
 
-// 4 × 2 panels (the 8th holds the legend), or 2 × 4 on a narrow screen (a phone), where four
-// columns would squeeze each curve into a sliver.
+/**
+ * The names of `d` joint values where the data and the model name none: `joint 0`, `joint 1`,
+ * …, the last `gripper` (the layout's convention; `Model.jointNames` says the same).
+ */
+export function defaultJointNames(d) {
+  return Array.from({ length: d }, (_, j) => (j + 1 === d && d > 1 ? "gripper" : `joint ${j}`));
+}
+
+/**
+ * The panels' titles for joint values named `names` (`Model.jointNames`): the simulator arm's
+ * joints with their units when the names are the defaults of 7 values (the shipped models,
+ * trained on the arm's layout), otherwise the names themselves.
+ */
+export function jointTitles(names) {
+  const arm = names.length === ARM_JOINTS && defaultJointNames(ARM_JOINTS).every((n, j) => n === names[j]);
+  return arm ? JOINT_NAMES.map((n, j) => `${n} (${JOINT_UNITS[j]})`) : names.map(String);
+}
+
+// 4 columns of panels, as many rows as the D panels and the legend (in the next free cell) need:
+// 4 × 2 for the arm's 7; 2 columns on a narrow screen (a phone), where four would squeeze each
+// curve into a sliver. The plot's box grows with the rows past the arm's (`--grow`, style.css).
 const COLS = 4;
 const NARROW_COLS = 2;
 const NARROW = 560;
@@ -27,15 +52,23 @@ const drawnFrom = new WeakMap();
  * Draws into `canvas` (sized from its CSS box at the device pixel ratio) and the step cursor
  * into `cursor`, a transparent canvas over it: the panels are redrawn only when the data
  * change, so that playback redraws the cursors alone.
- * `data`: {len, joints (T×7 true), observed (sorted steps), step, prediction: null or
- * {done (Uint8Array T), jointMean, jointSigma, count}, labels: optional legend names {truth, mean}
- * (imitate mode: demonstrated, imagined)}. Returns a function mapping a client x to a step.
+ * `data`: {len, names (a name per joint value: D of them, `Model.jointNames`), joints (T×D
+ * true), observed (sorted steps), step, prediction: null or {done (Uint8Array T), jointMean,
+ * jointSigma (T×D), count}, labels: optional legend names {truth, mean} (imitate mode:
+ * demonstrated, imagined)}. Returns a function mapping a client x to a step.
  */
 export function drawJoints(canvas, cursor, data) {
+  const names = data?.names ?? defaultJointNames(ARM_JOINTS);
+  const d = names.length;
+  const cols = cssSize(canvas).w < NARROW ? NARROW_COLS : COLS;
+  const rows = Math.ceil((d + 1) / cols);
+  plotGrid(canvas, cols, d);
+  // The box grows with the rows beyond the arm's (style.css's --grow; 1 for 7 joint values,
+  // so their layout is the one it always was); a change resizes the canvas, which redraws.
+  const grow = String(rows / Math.ceil((ARM_JOINTS + 1) / cols));
+  const box = canvas.parentElement;
+  if (box && box.style.getPropertyValue("--grow") !== grow) box.style.setProperty("--grow", grow);
   const { w, h } = cssSize(canvas);
-  const cols = w < NARROW ? NARROW_COLS : COLS;
-  const rows = Math.ceil((JOINTS + 1) / cols);
-  plotColumns(canvas, cols);
   const cw = (w - GAP.x * (cols - 1)) / cols;
   const ch = (h - GAP.y * (rows - 1)) / rows;
   const cells = [];
@@ -44,17 +77,20 @@ export function drawJoints(canvas, cursor, data) {
   }
   const p = data?.prediction;
   const labels = data?.labels ?? LABELS;
-  const key = [window.devicePixelRatio, w, h, data?.len, data?.joints, data?.observed.join(","), p, p?.count, labels.truth];
+  const key = [window.devicePixelRatio, w, h, data?.len, data?.joints, data?.observed.join(","), p, p?.count, labels.truth, names.join("\n")];
   const last = drawnFrom.get(canvas);
   if (!last || key.some((v, i) => v !== last[i])) {
     const { g } = fit(canvas);
-    drawLegend(g, cells[JOINTS], labels);
-    if (data && data.len >= 1) for (let j = 0; j < JOINTS; j++) drawJoint(g, cells[j], j, data);
+    drawLegend(g, cells[d], labels);
+    if (data && data.len >= 1) {
+      const titles = jointTitles(names);
+      for (let j = 0; j < d; j++) drawJoint(g, cells[j], j, d, titles[j], data);
+    }
     drawnFrom.set(canvas, key);
   }
   const { g } = fit(cursor);
   if (!data || data.len < 1) return () => 0;
-  for (let j = 0; j < JOINTS; j++) drawCursor(g, cells[j], data);
+  for (let j = 0; j < d; j++) drawCursor(g, cells[j], data);
   const pw = cw - PAD.left - PAD.right;
   // Client x → step, using the column under the pointer.
   return (clientX) => {
@@ -66,12 +102,13 @@ export function drawJoints(canvas, cursor, data) {
   };
 }
 
-function drawJoint(g, cell, j, { len, joints, observed, prediction }) {
+/** Panel `j` of `d` (joint value j of each step's d), titled `title`. */
+function drawJoint(g, cell, j, d, title, { len, joints, observed, prediction }) {
   const left = cell.x + PAD.left;
   const right = cell.x + cell.w - PAD.right;
   const top = cell.y + PAD.top;
   const bottom = cell.y + cell.h - PAD.bottom;
-  const at = (k) => joints[k * JOINTS + j];
+  const at = (k) => joints[k * d + j];
 
   // y range: the true curve, widened to the predicted band but never beyond 3 true ranges
   // (an unsure joint would otherwise flatten every other curve).
@@ -81,7 +118,7 @@ function drawJoint(g, cell, j, { len, joints, observed, prediction }) {
     lo = Math.min(lo, at(k));
     hi = Math.max(hi, at(k));
   }
-  const span = Math.max(hi - lo, j === JOINTS - 1 ? 0.01 : 0.1);
+  const span = Math.max(hi - lo, j === d - 1 ? 0.01 : 0.1);
   const mid = (lo + hi) / 2;
   let blo = mid - span / 2;
   let bhi = mid + span / 2;
@@ -89,8 +126,8 @@ function drawJoint(g, cell, j, { len, joints, observed, prediction }) {
   if (p) {
     for (let k = 0; k < len; k++) {
       if (!p.done[k]) continue;
-      const m = p.jointMean[k * JOINTS + j];
-      const s = 2 * p.jointSigma[k * JOINTS + j];
+      const m = p.jointMean[k * d + j];
+      const s = 2 * p.jointSigma[k * d + j];
       blo = Math.min(blo, m - s);
       bhi = Math.max(bhi, m + s);
     }
@@ -105,7 +142,7 @@ function drawJoint(g, cell, j, { len, joints, observed, prediction }) {
 
   // Frame, title, ticks.
   g.save();
-  panelFrame(g, { left, right, top, bottom }, `${JOINT_NAMES[j]} (${JOINT_UNITS[j]})`, cell.y + 12, JOINT_COLORS[j]);
+  panelFrame(g, { left, right, top, bottom }, title, cell.y + 12, jointColor(j));
   for (const v of ticks(lo, hi, 3)) {
     const yy = Math.round(y(v)) + 0.5;
     g.beginPath();
@@ -129,9 +166,9 @@ function drawJoint(g, cell, j, { len, joints, observed, prediction }) {
       if (runs.length && runs[runs.length - 1][1] === k - 1) runs[runs.length - 1][1] = k;
       else runs.push([k, k]);
     }
-    const mean = (k) => p.jointMean[k * JOINTS + j];
-    const sd = (k) => p.jointSigma[k * JOINTS + j];
-    g.fillStyle = JOINT_COLORS[j] + "40";
+    const mean = (k) => p.jointMean[k * d + j];
+    const sd = (k) => p.jointSigma[k * d + j];
+    g.fillStyle = jointColor(j) + "40";
     for (const [a, b] of runs) {
       g.beginPath();
       for (let k = a; k <= b; k++) g.lineTo(x(k), y(mean(k) + 2 * sd(k)));
@@ -139,7 +176,7 @@ function drawJoint(g, cell, j, { len, joints, observed, prediction }) {
       g.closePath();
       g.fill();
     }
-    g.strokeStyle = JOINT_COLORS[j];
+    g.strokeStyle = jointColor(j);
     g.lineWidth = 1.8;
     g.lineJoin = "round";
     for (const [a, b] of runs) {

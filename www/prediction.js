@@ -6,9 +6,8 @@ import { BLENDS, CHUNK, CHUNK_DELAY, MODEL_NAMES, MODELS } from "./config.js";
 import { firstDrawn, render, renderSoon, shownStep } from "./draw.js";
 import { emit } from "./events.js";
 import { log, predictionFinished, progress, timings } from "./hooks.js";
-import { loadModel, selectModel } from "./models.js";
+import { jointMismatch, loadModel, refuse, selectModel } from "./models.js";
 import { observedSteps } from "./observations.js";
-import { JOINTS } from "./plot.js";
 import { state } from "./state.js";
 import { setState, settle, showError } from "./status.js";
 import { ui } from "./ui.js";
@@ -21,15 +20,19 @@ export function cancelPrediction() {
   emit("dropped");
 }
 
-/** The frames, joints and time stamps of sequence `shown` at `steps`, as the model takes them. */
+/**
+ * The frames, joints (`shown.jointCount` values a step) and time stamps of sequence `shown` at
+ * `steps`, as the model takes them.
+ */
 export function observations(steps, shown = state.shown) {
   const px = shown.size * shown.size * 3;
+  const d = shown.jointCount;
   const frames = new Uint8Array(steps.length * px);
-  const joints = new Float32Array(steps.length * JOINTS);
+  const joints = new Float32Array(steps.length * d);
   const times = new Float32Array(steps.length);
   steps.forEach((k, i) => {
     frames.set(shown.frames.subarray(k * px, (k + 1) * px), i * px);
-    joints.set(shown.joints.subarray(k * JOINTS, (k + 1) * JOINTS), i * JOINTS);
+    joints.set(shown.joints.subarray(k * d, (k + 1) * d), i * d);
     times[i] = shown.times[k];
   });
   return { frames, joints, times };
@@ -42,9 +45,10 @@ let made = 0;
  * A prediction of the shown sequence's steps from `from` on (every step by default; live mode:
  * the unseen rest) by `model` from the observed `steps` under the modalities `observe`, in
  * chunks of `chunk` steps; `first`: a step decoded alone before the others. Not asked yet (`ask`).
+ * Its joints have the sequence's `jointCount` values a step (D: the model's, or `ask` refuses it).
  */
 export function prediction({ model, observe, steps, from = 0, chunk = CHUNK, first = null, shown = state.shown }) {
-  const { len, size } = shown;
+  const { len, size, jointCount } = shown;
   const px = size * size;
   // The steps in the order they are decoded (`first` first).
   const order = Int32Array.from({ length: len - from }, (_, i) => from + i);
@@ -68,8 +72,9 @@ export function prediction({ model, observe, steps, from = 0, chunk = CHUNK, fir
     count: 0,
     mean: new Uint8Array(len * px * 3),
     sigma: new Float32Array(len * px),
-    jointMean: new Float32Array(len * JOINTS),
-    jointSigma: new Float32Array(len * JOINTS),
+    jointCount,
+    jointMean: new Float32Array(len * jointCount),
+    jointSigma: new Float32Array(len * jointCount),
     maxSigma: 0,
     complete: false,
     /** When it was asked for (live mode: when the observation came in). */
@@ -86,6 +91,11 @@ export function prediction({ model, observe, steps, from = 0, chunk = CHUNK, fir
  */
 export function ask(p, { keepEncoded = false, delay = CHUNK_DELAY, onChunk = () => {} } = {}) {
   const { model, observe, first, steps, sequence } = p;
+  // A model of another number of joint values a step cannot read these (the callers check first).
+  const count = state.modelInfo.get(model)?.jointCount;
+  if (count !== undefined && count !== p.jointCount) {
+    return Promise.reject(new Error(`The ${MODEL_NAMES[model]} model reads ${count} joint values a step, the sequence has ${p.jointCount}.`));
+  }
   const { frames, joints, times } = observations(steps, sequence);
   // The targets: the time stamps of the steps in decoding order (permuted for p).
   const targets = Float32Array.from(p.order, (k) => sequence.times[k]);
@@ -121,12 +131,13 @@ export function ask(p, { keepEncoded = false, delay = CHUNK_DELAY, onChunk = () 
 /** A chunk of targets `c.start`… (indices into `p.order`) came: its steps are kept in `p`. */
 function store(p, c) {
   const px = p.size * p.size;
+  const d = p.jointCount;
   for (let i = 0; i < c.count; i++) {
     const k = p.order[c.start + i];
     p.mean.set(c.mean.subarray(i * px * 3, (i + 1) * px * 3), k * px * 3);
     p.sigma.set(c.sigma.subarray(i * px, (i + 1) * px), k * px);
-    p.jointMean.set(c.jointMean.subarray(i * JOINTS, (i + 1) * JOINTS), k * JOINTS);
-    p.jointSigma.set(c.jointSigma.subarray(i * JOINTS, (i + 1) * JOINTS), k * JOINTS);
+    p.jointMean.set(c.jointMean.subarray(i * d, (i + 1) * d), k * d);
+    p.jointSigma.set(c.jointSigma.subarray(i * d, (i + 1) * d), k * d);
     p.done[k] = 1;
   }
   p.maxSigma = Math.max(p.maxSigma, c.maxSigma);
@@ -150,6 +161,14 @@ export async function predict({ from = 0, chunk = CHUNK, first = null, keepEncod
   }
   state.live = true;
   cancelPrediction();
+  // The chosen model reads another number of joint values a step than the sequence has: it
+  // says so instead (the count is known once it is loaded: selectModel checks then).
+  const why = jointMismatch();
+  if (why) {
+    render();
+    refuse(why);
+    return;
+  }
   const p = prediction({ model: ui.model.value, observe: ui.observe.value, steps, from, chunk, first });
   state.prediction = p;
   setState("predicting");
@@ -249,6 +268,8 @@ export async function timePrediction(n, model = ui.model.value, chunk = CHUNK) {
     throw new Error(`timePrediction: unknown model ${JSON.stringify(model)} (one of ${Object.keys(MODELS).join(", ")})`);
   }
   await loadModel(model);
+  const why = jointMismatch(model);
+  if (why) throw new Error(`timePrediction: ${why}`);
   const { frames, joints, times } = observations(observedSteps());
   const targets = Float32Array.from({ length: n }, (_, i) => (n > 1 ? i / (n - 1) : 0.5));
   const t0 = performance.now();

@@ -7,9 +7,13 @@ export const state = {
   inference: null,
   /** Where an object may be placed: {x: [x0, x1], y: [y0, y1]} in metres. */
   region: null,
-  /** The simulated episode: the wasm Episode (kept to derive t/p/f sequences) and what it was made from. */
+  /**
+   * The simulated episode (or one read from a folder): the wasm Episode (kept to derive t/p/f
+   * sequences), what it was made from, `jointCount` (D, joint values a step) and `object` /
+   * `end` (null where the data has no object positions).
+   */
   episode: null,
-  /** The sequence shown to the model (the episode under the mode): frames, joints, times, images. */
+  /** The sequence shown to the model (the episode under the mode): frames, joints (T × jointCount), times, images. */
   shown: null,
   /** Observed steps of the shown sequence. */
   observed: new Set(),
@@ -43,6 +47,11 @@ export const state = {
   live: false,
   /** Model ids whose weights the workers hold. */
   loadedModels: new Set(),
+  /**
+   * Model id → the first worker's report on its weights, once loaded (models.js): `fileKind`,
+   * `imageSize`, `jointCount` (D, joint values a step), `jointNames`, `normalization`, …
+   */
+  modelInfo: new Map(),
   /** The step on screen. */
   step: 0,
   playing: false,

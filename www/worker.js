@@ -24,7 +24,9 @@
 //   {type: "forget"}                        drop every model's encoded steps
 // Messages out:
 //   {type: "inited", id}
-//   {type: "loaded", id, model, fileKind, imageSize, normalization, bytes, fetchMs, parseMs}
+//   {type: "loaded", id, model, fileKind, imageSize, jointCount, jointNames, normalization,
+//    bytes, fetchMs, parseMs}             jointCount: D, the joint values a step it reads and
+//                                          predicts (frames, joints D a step; its chunks T × D)
 //   {type: "chunk", id, start, count, mean, sigma, maxSigma, jointMean, jointSigma, ms}
 //   {type: "done", id, ms, encodeMs, encoded, steps}   encoded: the observations encoded
 //   {type: "forgotten", id}
@@ -183,6 +185,8 @@ async function fetchModel(id, url) {
     model: id,
     fileKind: model.kind,
     imageSize: model.imageSize,
+    jointCount: model.jointCount,
+    jointNames: model.jointNames,
     normalization: model.normalization,
     bytes: bytes.length,
     fetchMs: t1 - t0,

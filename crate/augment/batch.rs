@@ -1,5 +1,3 @@
-use crate::data::JOINTS;
-
 /// A training or inference batch as plain arrays (row-major), independent of any tensor
 /// library: the sampler fills it, the model turns it into tensors.
 ///
@@ -14,9 +12,11 @@ pub struct Batch {
     pub targets: usize,
     /// S: frame width and height.
     pub image_size: usize,
+    /// D: joint values a step.
+    pub joints: usize,
     /// `[B, N, 3, S, S]`: context frames, RGB scaled to [0, 1], channels first.
     pub context_images: Vec<f32>,
-    /// `[B, N, 7]`: context joints, normalised with the dataset's statistics.
+    /// `[B, N, D]`: context joints, normalised with the dataset's statistics.
     pub context_joints: Vec<f32>,
     /// `[B, N]`: context times (phase in [0, 1]).
     pub context_times: Vec<f32>,
@@ -24,7 +24,7 @@ pub struct Batch {
     pub context_mask: Vec<f32>,
     /// `[B, M, 3, S, S]`: target frames (empty at inference when only times are given).
     pub target_images: Vec<f32>,
-    /// `[B, M, 7]`: target joints, normalised (empty at inference).
+    /// `[B, M, D]`: target joints, normalised (empty at inference).
     pub target_joints: Vec<f32>,
     /// `[B, M]`: target times.
     pub target_times: Vec<f32>,
@@ -35,26 +35,28 @@ pub struct Batch {
 impl Batch {
     /// `b` sequences of `n` context slots (padding until [`Batch::set_context`] fills them)
     /// and `m` targets whose frames and joints [`Batch::set_target`] fills: training and
-    /// evaluation. Every value zero, every blend 0.
-    pub fn with_targets(b: usize, n: usize, m: usize, s: usize) -> Batch {
+    /// evaluation; frames of `s` pixels a side, `d` joint values a step. Every value zero,
+    /// every blend 0.
+    pub fn with_targets(b: usize, n: usize, m: usize, s: usize, d: usize) -> Batch {
         let px = 3 * s * s;
         Batch {
             target_images: vec![0.0; b * m * px],
-            target_joints: vec![0.0; b * m * JOINTS],
-            ..Batch::contexts_only(b, n, m, s)
+            target_joints: vec![0.0; b * m * d],
+            ..Batch::contexts_only(b, n, m, s, d)
         }
     }
 
     /// [`Batch::with_targets`] without target frames and joints (inference: only the target
     /// times are known, and they are decoded separately).
-    pub fn contexts_only(b: usize, n: usize, m: usize, s: usize) -> Batch {
+    pub fn contexts_only(b: usize, n: usize, m: usize, s: usize, d: usize) -> Batch {
         Batch {
             batch: b,
             contexts: n,
             targets: m,
             image_size: s,
+            joints: d,
             context_images: vec![0.0; b * n * 3 * s * s],
-            context_joints: vec![0.0; b * n * JOINTS],
+            context_joints: vec![0.0; b * n * d],
             context_times: vec![0.0; b * n],
             context_mask: vec![0.0; b * n],
             target_images: Vec::new(),
@@ -66,21 +68,14 @@ impl Batch {
 
     /// Context slot `i` of sequence `b`: a frame (interleaved RGB bytes, `S × S × 3`), its
     /// normalised joints and its time; the slot becomes real (mask 1).
-    pub fn set_context(
-        &mut self,
-        b: usize,
-        i: usize,
-        frame: &[u8],
-        joints: [f32; JOINTS],
-        time: f32,
-    ) {
+    pub fn set_context(&mut self, b: usize, i: usize, frame: &[u8], joints: &[f32], time: f32) {
         let slot = b * self.contexts + i;
         let s = self.image_size;
         put(
             s,
             slot,
             frame,
-            &joints,
+            joints,
             &mut self.context_images,
             &mut self.context_joints,
         );
@@ -90,21 +85,14 @@ impl Batch {
 
     /// Target `j` of sequence `b` of a batch [`Batch::with_targets`]: its frame, normalised
     /// joints and time.
-    pub fn set_target(
-        &mut self,
-        b: usize,
-        j: usize,
-        frame: &[u8],
-        joints: [f32; JOINTS],
-        time: f32,
-    ) {
+    pub fn set_target(&mut self, b: usize, j: usize, frame: &[u8], joints: &[f32], time: f32) {
         let slot = b * self.targets + j;
         let s = self.image_size;
         put(
             s,
             slot,
             frame,
-            &joints,
+            joints,
             &mut self.target_images,
             &mut self.target_joints,
         );
@@ -139,12 +127,12 @@ impl Batch {
     /// real contexts repeated in order to fill the padding slots): how well a model reproduces
     /// what it observed.
     pub fn contexts_as_targets(&self) -> Batch {
-        let (b, n) = (self.batch, self.contexts);
+        let (b, n, d) = (self.batch, self.contexts, self.joints);
         let px = 3 * self.image_size * self.image_size;
         let mut out = Batch {
             targets: n,
             target_images: vec![0.0; b * n * px],
-            target_joints: vec![0.0; b * n * JOINTS],
+            target_joints: vec![0.0; b * n * d],
             target_times: vec![0.0; b * n],
             ..self.clone()
         };
@@ -158,8 +146,8 @@ impl Batch {
                 let (from, to) = (s * n + j % real, s * n + j);
                 out.target_images[to * px..(to + 1) * px]
                     .copy_from_slice(&self.context_images[from * px..(from + 1) * px]);
-                out.target_joints[to * JOINTS..(to + 1) * JOINTS]
-                    .copy_from_slice(&self.context_joints[from * JOINTS..(from + 1) * JOINTS]);
+                out.target_joints[to * d..(to + 1) * d]
+                    .copy_from_slice(&self.context_joints[from * d..(from + 1) * d]);
                 out.target_times[to] = self.context_times[from];
             }
         }
@@ -178,13 +166,14 @@ fn put(
     s: usize,
     slot: usize,
     frame: &[u8],
-    joints: &[f32; JOINTS],
+    joints: &[f32],
     images: &mut [f32],
     values: &mut [f32],
 ) {
     let px = 3 * s * s;
     planar(frame, s, &mut images[slot * px..(slot + 1) * px]);
-    values[slot * JOINTS..(slot + 1) * JOINTS].copy_from_slice(joints);
+    let d = joints.len();
+    values[slot * d..(slot + 1) * d].copy_from_slice(joints);
 }
 
 /// Interleaved RGB bytes (`S × S × 3`) to channels-first floats in [0, 1] (`3 × S × S`).
@@ -201,10 +190,11 @@ pub fn planar(rgb: &[u8], s: usize, out: &mut [f32]) {
 mod tests {
     use super::*;
     use crate::augment::JointTargets;
+    use crate::data::JOINTS;
 
     #[test]
     fn shards_are_the_batch_s_sequences_in_order() {
-        let mut batch = Batch::with_targets(4, 2, 3, 2);
+        let mut batch = Batch::with_targets(4, 2, 3, 2, JOINTS);
         for values in [
             &mut batch.context_images,
             &mut batch.context_joints,
@@ -240,7 +230,7 @@ mod tests {
         assert_eq!(join(|b| &b.target_times), batch.target_times);
         assert_eq!(batch.shards(1), [batch.clone()]);
         // Inference batches have no target frames: their shards neither.
-        assert!(Batch::contexts_only(4, 2, 3, 2).shards(4)[3]
+        assert!(Batch::contexts_only(4, 2, 3, 2, JOINTS).shards(4)[3]
             .target_images
             .is_empty());
 

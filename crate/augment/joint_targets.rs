@@ -11,7 +11,7 @@ pub struct JointTargets {
     pub targets: usize,
     /// `[B, M_j]`: their times.
     pub times: Vec<f32>,
-    /// `[B, M_j, 7]`: their joints, normalised.
+    /// `[B, M_j, D]`: their joints, normalised.
     pub joints: Vec<f32>,
 }
 

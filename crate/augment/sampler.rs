@@ -176,8 +176,8 @@ mod tests {
         Sequence {
             image_size: 2,
             joints: (0..t).map(|k| [k as f32; 7]).collect(),
-            endpoint: vec![[0.0; 7]; t],
-            object: vec![[0.0; 3]; t],
+            endpoint: Some(vec![[0.0; 7]; t]),
+            object: Some(vec![[0.0; 3]; t]),
             frames: (0..t * 12).map(|i| (i % 251) as u8).collect(),
         }
     }
@@ -189,10 +189,10 @@ mod tests {
         Sequence {
             image_size: 2,
             joints: (0..t)
-                .map(|k| std::array::from_fn(|j| (1000 * id + 10 * k + j) as f32))
+                .map(|k| std::array::from_fn::<f32, JOINTS, _>(|j| (1000 * id + 10 * k + j) as f32))
                 .collect(),
-            endpoint: vec![[0.0; 7]; t],
-            object: vec![[0.0; 3]; t],
+            endpoint: Some(vec![[0.0; 7]; t]),
+            object: Some(vec![[0.0; 3]; t]),
             frames: (0..t).flat_map(|k| [(100 * id + k) as u8; 12]).collect(),
         }
     }
@@ -201,8 +201,8 @@ mod tests {
     /// normalised with another column's statistics, decode to no step.
     fn norm() -> Normalization {
         Normalization {
-            mean: [50.0, -20.0, 7.5, 300.0, 0.0, 1.0, -3.0],
-            std: [4.0, 0.5, 10.0, 2.5, 8.0, 0.25, 3.0],
+            mean: vec![50.0, -20.0, 7.5, 300.0, 0.0, 1.0, -3.0],
+            std: vec![4.0, 0.5, 10.0, 2.5, 8.0, 0.25, 3.0],
         }
     }
 
@@ -404,7 +404,7 @@ mod tests {
     #[test]
     fn frames_are_channels_first_in_unit_range() {
         let s = seq(3);
-        let batch = prediction(&s, &[1], &[0, 2], 0.5, &Normalization::identity());
+        let batch = prediction(&s, &[1], &[0, 2], 0.5, &Normalization::identity(JOINTS));
         // Pixel 0 of frame 1 is bytes 12, 13, 14.
         assert_eq!(batch.context_images[0], 12.0 / 255.0);
         assert_eq!(batch.context_images[4], 13.0 / 255.0);

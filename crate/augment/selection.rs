@@ -1,4 +1,4 @@
-use crate::data::{Normalization, JOINTS};
+use crate::data::{Joints, Normalization};
 
 use super::{Batch, JointTargets};
 
@@ -67,26 +67,26 @@ impl Selection {
         &self,
         image_size: usize,
         norm: &Normalization,
-        joints: impl Fn(usize) -> &'a [[f32; JOINTS]],
+        joints: impl Fn(usize) -> &'a Joints,
         frame: impl Fn(usize, usize) -> &'a [u8],
     ) -> (Batch, JointTargets) {
-        let b = self.picks.len();
-        let mut batch = Batch::with_targets(b, self.contexts, self.targets, image_size);
+        let (b, d) = (self.picks.len(), norm.width());
+        let mut batch = Batch::with_targets(b, self.contexts, self.targets, image_size, d);
         let mut joint_targets = JointTargets {
             batch: b,
             targets: self.joint_targets,
             times: Vec::with_capacity(b * self.joint_targets),
-            joints: Vec::with_capacity(b * self.joint_targets * JOINTS),
+            joints: Vec::with_capacity(b * self.joint_targets * d),
         };
         for (b, pick) in self.picks.iter().enumerate() {
             let (i, recorded) = (pick.sequence, joints(pick.sequence));
             for (slot, s) in pick.contexts.iter().enumerate() {
                 let values = norm.normalize(&recorded[s.index]);
-                batch.set_context(b, slot, frame(i, s.index), values, s.time);
+                batch.set_context(b, slot, frame(i, s.index), &values, s.time);
             }
             for (slot, s) in pick.targets.iter().enumerate() {
                 let values = norm.normalize(&recorded[s.index]);
-                batch.set_target(b, slot, frame(i, s.index), values, s.time);
+                batch.set_target(b, slot, frame(i, s.index), &values, s.time);
             }
             batch.blend[b] = pick.blend;
             for s in &pick.joint_targets {

@@ -3,7 +3,7 @@ use rand_pcg::Pcg64;
 use serde::{Deserialize, Serialize};
 
 use super::AugmentError;
-use crate::data::Sequence;
+use crate::data::{Joints, Sequence};
 
 /// The paper's training augmentation (§3.2): change the speed of random sections of a
 /// sequence and insert repeated frames (freezes), so that a frame's content stops telling its
@@ -140,9 +140,15 @@ impl TimeWarpConfig {
 pub fn gather(seq: &Sequence, indices: &[usize]) -> Sequence {
     Sequence {
         image_size: seq.image_size,
-        joints: indices.iter().map(|&k| seq.joints[k]).collect(),
-        endpoint: indices.iter().map(|&k| seq.endpoint[k]).collect(),
-        object: indices.iter().map(|&k| seq.object[k]).collect(),
+        joints: Joints::from_slices(seq.joints.width(), indices.iter().map(|&k| &seq.joints[k])),
+        endpoint: seq
+            .endpoint
+            .as_ref()
+            .map(|e| indices.iter().map(|&k| e[k]).collect()),
+        object: seq
+            .object
+            .as_ref()
+            .map(|o| indices.iter().map(|&k| o[k]).collect()),
         frames: indices
             .iter()
             .flat_map(|&k| seq.frame(k))

@@ -1,14 +1,19 @@
 use std::path::{Path, PathBuf};
 
 use super::layout::valid_action_name;
-use super::{read_sequence_from, DataError, Disk, Files, Sequence, SequenceRef};
+use super::{
+    read_joints, read_sequence_from, DataError, DatasetMeta, Disk, Files, Sequence, SequenceRef,
+};
 
-/// A dataset in the DMBN layout: `<root>/<id>/<action>/` folders. Opening only lists the
-/// sequences; reading (and validating) each is [`read`](Self::read)'s job.
+/// A dataset in the DMBN layout: `<root>/<id>/<action>/` folders, and optionally a
+/// `dataset.json` ([`DatasetMeta`]). Opening only lists the sequences; reading (and
+/// validating) each is [`read`](Self::read)'s job.
 #[derive(Debug, Clone)]
 pub struct Dataset {
     root: PathBuf,
     sequences: Vec<SequenceRef>,
+    meta: DatasetMeta,
+    camera: Option<String>,
 }
 
 impl Dataset {
@@ -16,11 +21,14 @@ impl Dataset {
     /// non-hidden folder inside it an action. Other entries (a LICENSE file, hidden folders)
     /// are ignored. Sequences are sorted by id, then action name.
     pub fn open(root: impl AsRef<Path>) -> Result<Self, DataError> {
-        Self::list(&Disk, root)
+        let mut dataset = Self::list(&Disk, root)?;
+        dataset.meta = DatasetMeta::read(&Disk, &dataset.root)?;
+        Ok(dataset)
     }
 
     /// [`open`](Self::open) on any [`Files`]: the same listing and errors for a folder held
-    /// in memory (the page's). Read its sequences with [`read_sequence_from`] and the same files.
+    /// in memory (the page's), without its `dataset.json` (the page names joints by the
+    /// model's file). Read its sequences with [`read_sequence_from`] and the same files.
     pub fn list(files: &impl Files, root: impl AsRef<Path>) -> Result<Self, DataError> {
         let root = root.as_ref().to_path_buf();
         if !files.is_dir(&root)? {
@@ -49,7 +57,81 @@ impl Dataset {
             return Err(DataError::NoSequences { path: root });
         }
         sequences.sort_by(|a, b| (a.id, &a.action).cmp(&(b.id, &b.action)));
-        Ok(Dataset { root, sequences })
+        Ok(Dataset {
+            root,
+            sequences,
+            meta: DatasetMeta::default(),
+            camera: None,
+        })
+    }
+
+    /// Read `camera`'s frames (its sub-folder `<camera>/` in every sequence folder) instead
+    /// of the default camera's; `None` keeps the default. An error names the cameras the first
+    /// sequence holds when it has no such folder.
+    pub fn with_camera(
+        mut self,
+        files: &impl Files,
+        camera: Option<&str>,
+    ) -> Result<Self, DataError> {
+        if let Some(name) = camera {
+            let first = &self.sequences[0].dir;
+            let cameras = files.folders(first)?;
+            if !valid_action_name(name) || !cameras.iter().any(|c| c == name) {
+                let mut cameras = cameras;
+                cameras.sort();
+                return Err(DataError::Metadata {
+                    path: first.clone(),
+                    reason: format!(
+                        "no camera {name:?}: expected a sub-folder of that name holding its frames; \
+                         the cameras here are the default (<k>.png){}",
+                        cameras.iter().map(|c| format!(", {c}")).collect::<String>()
+                    ),
+                });
+            }
+        }
+        self.camera = camera.map(str::to_string);
+        Ok(self)
+    }
+
+    /// The camera whose frames [`read`](Self::read) returns (`None`: the default camera).
+    pub fn camera(&self) -> Option<&str> {
+        self.camera.as_deref()
+    }
+
+    /// The dataset's `dataset.json` (empty where it has none).
+    pub fn meta(&self) -> &DatasetMeta {
+        &self.meta
+    }
+
+    /// The joint values a step of every sequence (D) and their names where `dataset.json`
+    /// gives them: read from the first sequence's joint file; [`check_width`](Self::check_width)
+    /// holds the others to it.
+    pub fn joint_width(
+        &self,
+        files: &impl Files,
+    ) -> Result<(usize, Option<Vec<String>>), DataError> {
+        let first = &self.sequences[0];
+        let width = read_joints(files, &first.dir, first.id)?.width();
+        Ok((width, self.meta.names_for(&self.root, width)?))
+    }
+
+    /// An error naming `seq`'s joint file unless its `found` values a step are `expected`
+    /// (the dataset's first sequence's, or a model's: `reference` says which).
+    pub fn check_width(
+        seq: &SequenceRef,
+        found: usize,
+        expected: usize,
+        reference: &str,
+    ) -> Result<(), DataError> {
+        if found == expected {
+            return Ok(());
+        }
+        Err(DataError::JointWidth {
+            path: super::joint_path(&seq.dir, seq.id),
+            found,
+            expected,
+            reference: reference.to_string(),
+        })
     }
 
     /// The folder the dataset was opened from.
@@ -105,9 +187,10 @@ impl Dataset {
             })
     }
 
-    /// Read and validate one sequence; frames resized to `image_size` when given.
+    /// Read and validate one sequence (the chosen camera's frames); frames resized to
+    /// `image_size` when given.
     pub fn read(&self, seq: &SequenceRef, image_size: Option<u32>) -> Result<Sequence, DataError> {
-        read_sequence_from(&Disk, &seq.dir, seq.id, image_size)
+        read_sequence_from(&Disk, &seq.dir, seq.id, self.camera(), image_size)
     }
 }
 

@@ -42,12 +42,34 @@ pub enum DataError {
         #[source]
         source: image::ImageError,
     },
-    #[error("{}: expected a {expected}x{expected} frame, found {}x{}", path.display(), found.0, found.1)]
+    #[error(
+        "{}: expected a {}x{} frame (as the sequence's first), found {}x{}",
+        path.display(), expected.0, expected.1, found.0, found.1
+    )]
     FrameSize {
         path: PathBuf,
-        expected: u32,
+        expected: (u32, u32),
         found: (u32, u32),
     },
+    #[error(
+        "{}: {found} joint values a step, expected {expected} as in {} (every sequence of a dataset, and the model, has the same joints)",
+        path.display(), reference
+    )]
+    JointWidth {
+        path: PathBuf,
+        found: usize,
+        expected: usize,
+        reference: String,
+    },
+    #[error("{}: no {what} (expected {}): {needed_by} needs it", dir.display(), file.display())]
+    Missing {
+        dir: PathBuf,
+        what: &'static str,
+        file: PathBuf,
+        needed_by: &'static str,
+    },
+    #[error("{}: {reason}", path.display())]
+    Metadata { path: PathBuf, reason: String },
     #[error("{}: cannot encode frame as PNG: {source}", path.display())]
     Encode {
         path: PathBuf,

@@ -5,18 +5,12 @@ use super::JointScale;
 /// Joint normalisation statistics of a dataset: the model sees `(joint - mean) / std` per
 /// column and predicts in that space. Saved in the model file, so predictions can be mapped
 /// back to radians (and gripper units) with the statistics the model was trained on.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Normalization {
-    /// Per-column mean of the 7 joint values (6 arm angles, gripper).
-    pub mean: [f32; 7],
+    /// Per-column mean of the D joint values (the original's: 6 arm angles, gripper).
+    pub mean: Vec<f32>,
     /// Per-column standard deviation, strictly positive.
-    pub std: [f32; 7],
-}
-
-impl Default for Normalization {
-    fn default() -> Self {
-        Self::identity()
-    }
+    pub std: Vec<f32>,
 }
 
 impl Normalization {
@@ -24,22 +18,28 @@ impl Normalization {
     /// that never moves, such as the gripper of a move-only dataset).
     pub const MIN_STD: f32 = 1e-6;
 
-    /// Mean 0 and standard deviation 1: joints are used as they are.
-    pub fn identity() -> Self {
+    /// Mean 0 and standard deviation 1 for `width` values: joints are used as they are.
+    pub fn identity(width: usize) -> Self {
         Self {
-            mean: [0.0; 7],
-            std: [1.0; 7],
+            mean: vec![0.0; width],
+            std: vec![1.0; width],
         }
     }
 
-    /// Column means and (population) standard deviations of joint rows. A column whose
-    /// standard deviation is below [`Normalization::MIN_STD`] gets 1, so it is only centred.
-    /// No rows gives the identity.
-    pub fn fit<'a>(rows: impl IntoIterator<Item = &'a [f32; 7]>) -> Self {
+    /// Values a step (D).
+    pub fn width(&self) -> usize {
+        self.mean.len()
+    }
+
+    /// Column means and (population) standard deviations of joint rows of `width` values.
+    /// A column whose standard deviation is below [`Normalization::MIN_STD`] gets 1, so it is
+    /// only centred. No rows gives the identity.
+    pub fn fit<'a>(width: usize, rows: impl IntoIterator<Item = &'a [f32]>) -> Self {
         let mut count = 0.0f64;
-        let mut sum = [0.0f64; 7];
-        let mut sum_sq = [0.0f64; 7];
+        let mut sum = vec![0.0f64; width];
+        let mut sum_sq = vec![0.0f64; width];
         for row in rows {
+            assert_eq!(row.len(), width, "a joint row of another width");
             count += 1.0;
             for (j, &v) in row.iter().enumerate() {
                 sum[j] += v as f64;
@@ -47,10 +47,10 @@ impl Normalization {
             }
         }
         if count == 0.0 {
-            return Self::identity();
+            return Self::identity(width);
         }
-        let mut out = Self::identity();
-        for j in 0..7 {
+        let mut out = Self::identity(width);
+        for j in 0..width {
             let mean = sum[j] / count;
             let var = (sum_sq[j] / count - mean * mean).max(0.0);
             out.mean[j] = mean as f32;
@@ -61,11 +61,12 @@ impl Normalization {
     }
 
     /// These statistics with the arm angles' scale chosen by `scale`: for
-    /// [`JointScale::Shared`], one standard deviation for the six of them (the root mean square
-    /// of theirs), the gripper's unchanged.
+    /// [`JointScale::Shared`], one standard deviation for all values but the last (the root
+    /// mean square of theirs), the last's (the gripper's, by the layout's convention) unchanged.
     pub fn scaled(mut self, scale: JointScale) -> Self {
-        if scale == JointScale::Shared {
-            let arm = &mut self.std[..6];
+        if scale == JointScale::Shared && self.width() > 0 {
+            let n = super::arm_joints(self.width());
+            let arm = &mut self.std[..n];
             let shared = (arm.iter().map(|s| s * s).sum::<f32>() / arm.len() as f32).sqrt();
             arm.fill(shared);
         }
@@ -73,14 +74,16 @@ impl Normalization {
     }
 
     /// `(joints - mean) / std`, column by column.
-    pub fn normalize(&self, joints: &[f32; 7]) -> [f32; 7] {
-        std::array::from_fn(|j| (joints[j] - self.mean[j]) / self.std[j])
+    pub fn normalize(&self, joints: &[f32]) -> Vec<f32> {
+        (0..self.width())
+            .map(|j| (joints[j] - self.mean[j]) / self.std[j])
+            .collect()
     }
 
     /// Mean squared normalised value over every joint of `rows`: how many (squared) standard
     /// deviations joints lie from the data these statistics come from. The page offers, for a
     /// folder, the models whose normalisation its joints fit best. Infinite without rows.
-    pub fn distance<'a>(&self, rows: impl IntoIterator<Item = &'a [f32; 7]>) -> f64 {
+    pub fn distance<'a>(&self, rows: impl IntoIterator<Item = &'a [f32]>) -> f64 {
         let (mut sum, mut n) = (0.0f64, 0usize);
         for row in rows {
             sum += self
@@ -88,7 +91,7 @@ impl Normalization {
                 .iter()
                 .map(|z| f64::from(*z).powi(2))
                 .sum::<f64>();
-            n += 7;
+            n += self.width();
         }
         if n == 0 {
             f64::INFINITY
@@ -98,8 +101,10 @@ impl Normalization {
     }
 
     /// `joints * std + mean`: back from model space to joint units.
-    pub fn denormalize(&self, joints: &[f32; 7]) -> [f32; 7] {
-        std::array::from_fn(|j| joints[j] * self.std[j] + self.mean[j])
+    pub fn denormalize(&self, joints: &[f32]) -> Vec<f32> {
+        (0..self.width())
+            .map(|j| joints[j] * self.std[j] + self.mean[j])
+            .collect()
     }
 }
 
@@ -113,7 +118,7 @@ mod tests {
             [1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 0.0],
             [3.0, 2.0, 5.0, 4.0, 5.0, 6.0, 0.0],
         ];
-        let n = Normalization::fit(&rows);
+        let n = Normalization::fit(7, rows.iter().map(|r| &r[..]));
         assert_eq!(n.mean[0], 2.0);
         assert_eq!(n.std[0], 1.0);
         assert_eq!(n.std[1], 1.0, "constant column gets std 1");
@@ -123,19 +128,25 @@ mod tests {
         assert_eq!(z[1], 0.0);
         let back = n.denormalize(&z);
         assert_eq!(back, rows[1]);
-        assert_eq!(n.distance(&rows), 2.0 / 7.0);
-        assert_eq!(n.distance(&[]), f64::INFINITY);
+        assert_eq!(n.distance(rows.iter().map(|r| &r[..])), 2.0 / 7.0);
+        assert_eq!(n.distance([]), f64::INFINITY);
     }
 
     #[test]
     fn a_shared_scale_is_the_arm_s_root_mean_square_and_keeps_the_gripper_s() {
         let n = Normalization {
-            mean: [1.0; 7],
-            std: [1.0, 1.0, 1.0, 1.0, 7.0, 1.0, 0.5],
+            mean: vec![1.0; 7],
+            std: vec![1.0, 1.0, 1.0, 1.0, 7.0, 1.0, 0.5],
         };
-        assert_eq!(n.scaled(JointScale::PerJoint), n);
-        let shared = n.scaled(JointScale::Shared);
+        assert_eq!(n.clone().scaled(JointScale::PerJoint), n);
+        let shared = n.clone().scaled(JointScale::Shared);
         assert_eq!(shared.mean, n.mean);
         assert_eq!(shared.std, [3.0, 3.0, 3.0, 3.0, 3.0, 3.0, 0.5]);
+        // Three values: the first two share, the last keeps its own.
+        let three = Normalization {
+            mean: vec![0.0; 3],
+            std: vec![1.0, 7.0, 0.5],
+        };
+        assert_eq!(three.scaled(JointScale::Shared).std, [5.0, 5.0, 0.5]);
     }
 }

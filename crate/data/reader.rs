@@ -7,26 +7,28 @@ use image::imageops::FilterType;
 use image::RgbImage;
 
 use super::layout::{endpoint_path, joint_path, object_path, MAX_IMAGE_SIZE};
-use super::{DataError, Disk, Files, Sequence, ENDPOINT, JOINTS};
+use super::{DataError, Disk, Files, Joints, Sequence, ENDPOINT};
 
 /// Frame file extensions, in order of preference when one step has several.
 const FRAME_EXTENSIONS: [&str; 3] = ["png", "jpeg", "jpg"];
 
-/// Read the sequence in `dir` (`joint_<id>.txt`, `object_<id>.txt`, `endpoint_<id>.txt` and
-/// frames `0.png`/`0.jpeg` …). Frames beyond the joint rows are ignored (the original folders
-/// often hold a few). With `image_size`, frames are resized to that many pixels per side: an
-/// exact area average when it divides the stored size (128 → 64), otherwise a triangle filter;
-/// both deterministic.
+/// Read the sequence in `dir` (`joint_<id>.txt`, optionally `object_<id>.txt` and
+/// `endpoint_<id>.txt`, and frames `0.png`/`0.jpeg` …). Frames beyond the joint rows are
+/// ignored (the original folders often hold a few). With `image_size`, frames are resized to
+/// that many pixels per side (see [`read_frames`]); without, square frames are kept as they
+/// are and others stretched to the square of their longer side.
 pub fn read_sequence(dir: &Path, id: u32, image_size: Option<u32>) -> Result<Sequence, DataError> {
-    read_sequence_from(&Disk, dir, id, image_size)
+    read_sequence_from(&Disk, dir, id, None, image_size)
 }
 
-/// [`read_sequence`] on any [`Files`]: the page reads a folder held in memory with the same
-/// rules and messages as the tools read the disk.
+/// [`read_sequence`] on any [`Files`] (the page reads a folder held in memory with the same
+/// rules and messages as the tools read the disk), the frames of `camera` (its sub-folder
+/// `<dir>/<camera>/`; `None`: the default camera's frames in `dir` itself).
 pub fn read_sequence_from(
     files: &impl Files,
     dir: &Path,
     id: u32,
+    camera: Option<&str>,
     image_size: Option<u32>,
 ) -> Result<Sequence, DataError> {
     if let Some(size) = image_size {
@@ -35,15 +37,27 @@ pub fn read_sequence_from(
         }
     }
     let joint_file = joint_path(dir, id);
-    let joints: Vec<[f32; JOINTS]> = read_table(files, &joint_file)?;
-    let object: Vec<[f32; 3]> = read_table(files, &object_path(dir, id))?;
-    let endpoint: Vec<[f32; ENDPOINT]> = read_table(files, &endpoint_path(dir, id))?;
+    let joints = read_joints(files, dir, id)?;
     let rows = joints.len();
+    let present = files.files(dir)?;
+    let optional = |path: PathBuf| -> bool {
+        path.file_name()
+            .and_then(|n| n.to_str())
+            .is_some_and(|n| present.iter().any(|p| p == n))
+    };
+    let mut object = None;
+    if optional(object_path(dir, id)) {
+        object = Some(read_table::<3>(files, &object_path(dir, id))?);
+    }
+    let mut endpoint = None;
+    if optional(endpoint_path(dir, id)) {
+        endpoint = Some(read_table::<ENDPOINT>(files, &endpoint_path(dir, id))?);
+    }
     for (path, found) in [
-        (object_path(dir, id), object.len()),
-        (endpoint_path(dir, id), endpoint.len()),
+        (object_path(dir, id), object.as_ref().map(Vec::len)),
+        (endpoint_path(dir, id), endpoint.as_ref().map(Vec::len)),
     ] {
-        if found != rows {
+        if let Some(found) = found.filter(|&n| n != rows) {
             return Err(DataError::RowMismatch {
                 path,
                 found,
@@ -53,7 +67,8 @@ pub fn read_sequence_from(
         }
     }
 
-    let paths = frame_paths(files, dir, rows)?;
+    let frames_dir = camera_dir(dir, camera);
+    let paths = frame_paths(files, &frames_dir, rows)?;
     let mut frames = Vec::new();
     let mut size = None;
     for path in &paths {
@@ -62,7 +77,9 @@ pub fn read_sequence_from(
         frames.extend_from_slice(&frame);
     }
     Ok(Sequence {
-        image_size: image_size.or(size).unwrap_or(0),
+        image_size: image_size
+            .or(size.map(|s: (u32, u32)| s.0.max(s.1)))
+            .unwrap_or(0),
         joints,
         endpoint,
         object,
@@ -70,19 +87,29 @@ pub fn read_sequence_from(
     })
 }
 
-/// The joints (`joint_<id>.txt`) of the sequence in `dir` alone: what training holds in memory
-/// of every sequence, reading frames only when a batch needs them ([`read_frames`]).
-pub fn read_joints(
-    files: &impl Files,
-    dir: &Path,
-    id: u32,
-) -> Result<Vec<[f32; JOINTS]>, DataError> {
-    read_table(files, &joint_path(dir, id))
+/// The folder holding `camera`'s frames: `<dir>/<camera>/`, or `dir` for the default camera.
+pub fn camera_dir(dir: &Path, camera: Option<&str>) -> PathBuf {
+    match camera {
+        Some(name) => dir.join(name),
+        None => dir.to_path_buf(),
+    }
 }
 
-/// Frames `steps` of the `rows`-step sequence in `dir`, each as [`read_sequence`] reads it
-/// (resized to `image_size`): a training batch decodes only the steps it holds. Each frame
-/// must be square; that all have one size is [`read_sequence`]'s check, which sees them all.
+/// The joints (`joint_<id>.txt`) of the sequence in `dir` alone: what training holds in memory
+/// of every sequence, reading frames only when a batch needs them ([`read_frames`]). The
+/// number of values a step is the file's first row's; every row must have as many.
+pub fn read_joints(files: &impl Files, dir: &Path, id: u32) -> Result<Joints, DataError> {
+    let path = joint_path(dir, id);
+    let (width, values) = read_values(files, &path, None)?;
+    Ok(Joints::new(width, values).expect("rows of the width read"))
+}
+
+/// Frames `steps` of the `rows`-step sequence whose frames are in `dir` (a camera's folder,
+/// [`camera_dir`]), each as [`read_sequence`] reads it: resized to `image_size` pixels a side,
+/// an exact area average when it divides a square stored size (128 → 64), otherwise a
+/// triangle filter (a frame of another aspect is stretched to the square); both
+/// deterministic. A training batch decodes only the steps it holds; that all frames have one
+/// size is [`read_sequence`]'s check, which sees them all.
 pub fn read_frames(
     files: &impl Files,
     dir: &Path,
@@ -108,33 +135,51 @@ pub fn read_frames(
         .collect()
 }
 
-/// The frame at `path` as RGB bytes, resized to `image_size` when given, and its stored size:
-/// it must be `expected` pixels square (any square size when `None`).
+/// The frame at `path` as RGB bytes, resized to `image_size` when given (else a square
+/// stored frame as it is), and its stored size: it must be `expected` (any size when `None`).
 fn load_frame(
     files: &impl Files,
     path: &Path,
-    expected: Option<u32>,
+    expected: Option<(u32, u32)>,
     image_size: Option<u32>,
-) -> Result<(u32, Vec<u8>), DataError> {
+) -> Result<((u32, u32), Vec<u8>), DataError> {
     let img = read_frame(files, path)?;
-    let expected = expected.unwrap_or(img.width());
-    if img.dimensions() != (expected, expected) {
+    let stored = img.dimensions();
+    let expected = expected.unwrap_or(stored);
+    if stored != expected {
         return Err(DataError::FrameSize {
             path: path.to_path_buf(),
             expected,
-            found: img.dimensions(),
+            found: stored,
         });
     }
-    let img = match image_size {
-        Some(target) if target != expected => resize(&img, target),
-        _ => img,
+    // Unresized, a frame of another aspect is stretched to the square of its longer side.
+    let side = image_size.unwrap_or(stored.0.max(stored.1));
+    let img = if (side, side) == stored {
+        img
+    } else {
+        resize(&img, side)
     };
-    Ok((expected, img.into_raw()))
+    Ok((stored, img.into_raw()))
 }
 
-/// Parse a whitespace-separated table of `N` finite numbers per row. Trailing blank lines are
-/// allowed; any other line must have exactly `N` values.
+/// Parse a whitespace-separated table of `N` finite numbers per row.
 fn read_table<const N: usize>(files: &impl Files, path: &Path) -> Result<Vec<[f32; N]>, DataError> {
+    let (_, values) = read_values(files, path, Some(N))?;
+    Ok(values
+        .chunks_exact(N)
+        .map(|row| row.try_into().expect("N values"))
+        .collect())
+}
+
+/// Parse a whitespace-separated table of finite numbers, `width` per row (the first row's
+/// count when `None`), returned with its width. Trailing blank lines are allowed; any other
+/// line must have exactly `width` values.
+fn read_values(
+    files: &impl Files,
+    path: &Path,
+    width: Option<usize>,
+) -> Result<(usize, Vec<f32>), DataError> {
     let bytes = files.read(path)?;
     let text = std::str::from_utf8(&bytes).map_err(|e| DataError::Io {
         path: path.to_path_buf(),
@@ -145,20 +190,21 @@ fn read_table<const N: usize>(files: &impl Files, path: &Path) -> Result<Vec<[f3
         .iter()
         .rposition(|l| !l.trim().is_empty())
         .map_or(0, |i| i + 1);
-    let mut rows = Vec::with_capacity(used);
+    let mut values = Vec::new();
+    let mut width = width;
     for (i, line) in lines[..used].iter().enumerate() {
         let fields: Vec<&str> = line.split_whitespace().collect();
-        if fields.len() != N {
+        let expected = *width.get_or_insert(fields.len());
+        if fields.len() != expected || expected == 0 {
             return Err(DataError::Columns {
                 path: path.to_path_buf(),
                 line: i + 1,
-                expected: N,
+                expected: expected.max(1),
                 found: fields.len(),
             });
         }
-        let mut row = [0.0f32; N];
-        for (c, (field, value)) in fields.iter().zip(row.iter_mut()).enumerate() {
-            *value = match field.parse::<f32>() {
+        for (c, field) in fields.iter().enumerate() {
+            let value = match field.parse::<f32>() {
                 Ok(v) if v.is_finite() => v,
                 _ => {
                     return Err(DataError::NonNumeric {
@@ -169,15 +215,15 @@ fn read_table<const N: usize>(files: &impl Files, path: &Path) -> Result<Vec<[f3
                     })
                 }
             };
+            values.push(value);
         }
-        rows.push(row);
     }
-    if rows.is_empty() {
-        return Err(DataError::NoRows {
+    match width {
+        Some(width) if !values.is_empty() => Ok((width, values)),
+        _ => Err(DataError::NoRows {
             path: path.to_path_buf(),
-        });
+        }),
     }
-    Ok(rows)
 }
 
 /// Paths of frames `0..rows` in `dir`, checking there are enough and none is missing.
@@ -234,12 +280,12 @@ fn read_frame(files: &impl Files, path: &Path) -> Result<RgbImage, DataError> {
     Ok(img.to_rgb8())
 }
 
-/// Resize a square frame to `target` pixels per side: an exact, rounded area average when
-/// `target` divides the size (integer arithmetic, identical on every platform), otherwise
-/// image's triangle filter.
+/// Resize a frame to `target` pixels per side: an exact, rounded area average when the frame
+/// is square and `target` divides its size (integer arithmetic, identical on every
+/// platform), otherwise image's triangle filter (stretching another aspect to the square).
 fn resize(img: &RgbImage, target: u32) -> RgbImage {
     let size = img.width();
-    if target < size && size % target == 0 {
+    if img.height() == size && target < size && size % target == 0 {
         let f = size / target;
         let n = f * f;
         RgbImage::from_fn(target, target, |x, y| {

@@ -1,6 +1,9 @@
 use sha2::{Digest, Sha256};
 
-/// Number of joint values per step: 6 arm angles (radians), then the gripper value.
+use super::Joints;
+
+/// Joint values per step of the original DMBN arm and of the simulator's UR5-like arm: 6 arm
+/// angles (radians), then the gripper. Other robots bring their own count ([`Joints::width`]).
 pub const JOINTS: usize = 7;
 /// Number of end-effector values per step: position xyz, orientation (3 Euler angles), gripper.
 pub const ENDPOINT: usize = 7;
@@ -12,12 +15,14 @@ pub const ENDPOINT: usize = 7;
 pub struct Sequence {
     /// Width and height of every frame, in pixels.
     pub image_size: u32,
-    /// `[T][7]`: 6 joint angles in radians, then the gripper value (0 open, negative closing).
-    pub joints: Vec<[f32; JOINTS]>,
-    /// `[T][7]`: end effector xyz, 3 orientation values, gripper (the original's column meaning).
-    pub endpoint: Vec<[f32; ENDPOINT]>,
-    /// `[T][3]`: object position xyz.
-    pub object: Vec<[f32; 3]>,
+    /// `[T][D]`: the robot's joint values (the original's: 6 angles in radians, then the
+    /// gripper, 0 open, negative closing). By convention the last of several is the gripper.
+    pub joints: Joints,
+    /// `[T][7]`: end effector xyz, 3 orientation values, gripper (the original's column
+    /// meaning); `None` where the data has no `endpoint_<id>.txt` (most robots record none).
+    pub endpoint: Option<Vec<[f32; ENDPOINT]>>,
+    /// `[T][3]`: object position xyz; `None` where the data has no `object_<id>.txt`.
+    pub object: Option<Vec<[f32; 3]>>,
     /// `T * image_size * image_size * 3` bytes: frames in step order, rows top to bottom, RGB.
     pub frames: Vec<u8>,
 }
@@ -66,13 +71,13 @@ impl Sequence {
         let mut h = Sha256::new();
         h.update(self.image_size.to_le_bytes());
         h.update((self.len() as u64).to_le_bytes());
-        for v in self.joints.iter().flatten() {
+        for v in self.joints.values() {
             h.update(v.to_le_bytes());
         }
-        for v in self.endpoint.iter().flatten() {
+        for v in self.endpoint.iter().flatten().flatten() {
             h.update(v.to_le_bytes());
         }
-        for v in self.object.iter().flatten() {
+        for v in self.object.iter().flatten().flatten() {
             h.update(v.to_le_bytes());
         }
         h.update(&self.frames);

@@ -9,8 +9,8 @@ use image::{ExtendedColorType, ImageEncoder};
 use super::layout::{endpoint_path, joint_path, object_path, sequence_dir, valid_action_name};
 use super::{write_atomic, DataError, Sequence};
 
-/// Write `seq` as `<root>/<id>/<action>/<k>.png` plus `joint_<id>.txt`, `object_<id>.txt`
-/// and `endpoint_<id>.txt` (values space separated in Rust's shortest round-trip `{}` format,
+/// Write `seq` as `<root>/<id>/<action>/<k>.png` plus `joint_<id>.txt` and, where the
+/// sequence has them, `object_<id>.txt` and `endpoint_<id>.txt` (values space separated in Rust's shortest round-trip `{}` format,
 /// so the text is deterministic and reads back to the same `f32`s). Each file is written to a
 /// hidden temporary name and renamed, so a reader never sees a half-written file. Returns the
 /// sequence folder.
@@ -36,9 +36,13 @@ pub fn write_sequence(
             })?;
         write_atomic(&path, &png)?;
     }
-    write_atomic(&joint_path(&dir, id), table(&seq.joints).as_bytes())?;
-    write_atomic(&object_path(&dir, id), table(&seq.object).as_bytes())?;
-    write_atomic(&endpoint_path(&dir, id), table(&seq.endpoint).as_bytes())?;
+    write_atomic(&joint_path(&dir, id), table(seq.joints.rows()).as_bytes())?;
+    if let Some(object) = &seq.object {
+        write_atomic(&object_path(&dir, id), table(object.iter()).as_bytes())?;
+    }
+    if let Some(endpoint) = &seq.endpoint {
+        write_atomic(&endpoint_path(&dir, id), table(endpoint.iter()).as_bytes())?;
+    }
     Ok(dir)
 }
 
@@ -62,11 +66,16 @@ fn check_sequence(id: u32, action: &str, seq: &Sequence) -> Result<(), DataError
     if seq.image_size == 0 {
         return Err(bad("its image size is 0".into()));
     }
-    if seq.object.len() != t || seq.endpoint.len() != t {
+    let object = seq.object.as_deref().unwrap_or_default();
+    let endpoint = seq.endpoint.as_deref().unwrap_or_default();
+    let rows = |v: Option<usize>| v.map_or("no".to_string(), |n| n.to_string());
+    if seq.object.as_ref().is_some_and(|o| o.len() != t)
+        || seq.endpoint.as_ref().is_some_and(|e| e.len() != t)
+    {
         return Err(bad(format!(
             "{t} joint rows but {} object rows and {} endpoint rows",
-            seq.object.len(),
-            seq.endpoint.len()
+            rows(seq.object.as_ref().map(Vec::len)),
+            rows(seq.endpoint.as_ref().map(Vec::len))
         )));
     }
     let expected = (seq.image_size as u64).pow(2) * 3 * t as u64;
@@ -79,10 +88,10 @@ fn check_sequence(id: u32, action: &str, seq: &Sequence) -> Result<(), DataError
     }
     let values = seq
         .joints
+        .values()
         .iter()
-        .flatten()
-        .chain(seq.object.iter().flatten())
-        .chain(seq.endpoint.iter().flatten());
+        .chain(object.iter().flatten())
+        .chain(endpoint.iter().flatten());
     if let Some(v) = values.into_iter().find(|v| !v.is_finite()) {
         return Err(bad(format!("it holds the non-finite value {v}")));
     }
@@ -90,9 +99,10 @@ fn check_sequence(id: u32, action: &str, seq: &Sequence) -> Result<(), DataError
 }
 
 /// Rows of numbers as text: space separated, one row per line.
-fn table<const N: usize>(rows: &[[f32; N]]) -> String {
+fn table<'a, R: AsRef<[f32]> + 'a>(rows: impl Iterator<Item = R>) -> String {
     let mut out = String::new();
     for row in rows {
+        let row = row.as_ref();
         for (c, v) in row.iter().enumerate() {
             if c > 0 {
                 out.push(' ');

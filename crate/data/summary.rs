@@ -1,7 +1,7 @@
 use std::collections::{BTreeMap, BTreeSet};
 use std::fmt;
 
-use super::{ActionSummary, Sequence, JOINTS};
+use super::{ActionSummary, Sequence};
 
 /// What `dmbn inspect` reports about a dataset: built one sequence at a time with
 /// [`add`](Self::add), so a dataset can be summarised without holding it in memory.
@@ -11,8 +11,13 @@ pub struct Summary {
     pub actions: BTreeMap<String, ActionSummary>,
     /// Distinct sequence ids.
     pub ids: BTreeSet<u32>,
-    /// Per joint column: (min, max) over every step of every sequence.
-    pub joints: [(f32, f32); JOINTS],
+    /// Per joint column: (min, max) over every step of every sequence (as many as the
+    /// dataset's joint values; `dmbn inspect` checks first that every sequence has as many).
+    pub joints: Vec<(f32, f32)>,
+    /// Names of the joint values, where the dataset's `dataset.json` gives them.
+    pub joint_names: Option<Vec<String>>,
+    /// Sequences without an `object_<id>.txt` (the object mask, `imitate` need one).
+    pub without_object: usize,
     /// Per object coordinate x, y, z: (min, max).
     pub object: [(f32, f32); 3],
     /// Frame size in pixels -> number of sequences with it.
@@ -32,7 +37,9 @@ impl Summary {
         Summary {
             actions: BTreeMap::new(),
             ids: BTreeSet::new(),
-            joints: [empty; JOINTS],
+            joints: Vec::new(),
+            joint_names: None,
+            without_object: 0,
             object: [empty; 3],
             image_sizes: BTreeMap::new(),
         }
@@ -46,11 +53,15 @@ impl Summary {
             .add(seq.len());
         self.ids.insert(id);
         *self.image_sizes.entry(seq.image_size).or_default() += 1;
+        if self.joints.is_empty() {
+            self.joints = vec![(f32::INFINITY, f32::NEG_INFINITY); seq.joints.width()];
+        }
         for row in &seq.joints {
             widen(&mut self.joints, row);
         }
-        for row in &seq.object {
-            widen(&mut self.object, row);
+        match &seq.object {
+            Some(object) => object.iter().for_each(|row| widen(&mut self.object, row)),
+            None => self.without_object += 1,
         }
     }
 
@@ -60,7 +71,7 @@ impl Summary {
     }
 }
 
-fn widen<const N: usize>(ranges: &mut [(f32, f32); N], row: &[f32; N]) {
+fn widen(ranges: &mut [(f32, f32)], row: &[f32]) {
     for (r, &v) in ranges.iter_mut().zip(row) {
         r.0 = r.0.min(v);
         r.1 = r.1.max(v);
@@ -85,9 +96,10 @@ impl fmt::Display for Summary {
             .collect();
         writeln!(
             f,
-            "{} sequences, {} ids, frames {}",
+            "{} sequences, {} ids, {} joint values a step, frames {}",
             self.sequences(),
             self.ids.len(),
+            self.joints.len(),
             if sizes.is_empty() {
                 "-".into()
             } else {
@@ -113,16 +125,24 @@ impl fmt::Display for Summary {
         }
         writeln!(f)?;
         writeln!(f, "{:<12} range (min .. max)", "column")?;
+        let width = self.joints.len();
         for (j, r) in self.joints.iter().enumerate() {
-            let label = if j + 1 == JOINTS {
-                "gripper".to_string()
-            } else {
-                format!("joint {j}")
+            let label = match &self.joint_names {
+                Some(names) => names[j].clone(),
+                None if j + 1 == width && width > 1 => "gripper".to_string(),
+                None => format!("joint {j}"),
             };
             writeln!(f, "{label:<12} {}", range(*r))?;
         }
         for (axis, r) in ["x", "y", "z"].iter().zip(&self.object) {
             writeln!(f, "{:<12} {}", format!("object {axis}"), range(*r))?;
+        }
+        if self.without_object > 0 {
+            writeln!(
+                f,
+                "{} sequences have no object_<id>.txt: no object mask (IoU) or imitation for them",
+                self.without_object
+            )?;
         }
         Ok(())
     }

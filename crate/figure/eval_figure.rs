@@ -3,7 +3,7 @@ use plotters::prelude::*;
 
 use super::joint_plot::register;
 use super::{joint_plot, FigureError, JointPlot};
-use crate::data::JOINTS;
+use crate::data::Joints;
 use crate::eval::{evenly_spaced, Evaluation};
 
 /// Width of the row-label column, pixels.
@@ -13,9 +13,14 @@ const CAPTION: u32 = 16;
 
 /// A figure like the paper's Figures 2-3 for one evaluation: observed frames (y_o), generated
 /// mean frames (ỹ_t) with their σ heat maps, and the targets (y_t) at `columns` evenly spaced
-/// steps, frames scaled up `zoom` times; the 7 joint curves (target, mean ± 2σ, observed
-/// points) below.
-pub fn eval_figure(e: &Evaluation, columns: usize, zoom: u32) -> Result<RgbImage, FigureError> {
+/// steps, frames scaled up `zoom` times; a joint curve per value named in `names` (target,
+/// mean ± 2σ, observed points) below.
+pub fn eval_figure(
+    e: &Evaluation,
+    names: &[String],
+    columns: usize,
+    zoom: u32,
+) -> Result<RgbImage, FigureError> {
     register();
     let seq = &e.shown.sequence;
     let s = seq.image_size;
@@ -110,21 +115,22 @@ pub fn eval_figure(e: &Evaluation, columns: usize, zoom: u32) -> Result<RgbImage
     let mut order: Vec<usize> = (0..seq.len()).collect();
     order.sort_by(|&a, &b| e.shown.times[a].total_cmp(&e.shown.times[b]));
     let times: Vec<f32> = order.iter().map(|&k| e.shown.times[k]).collect();
-    let truth: Vec<[f32; JOINTS]> = order.iter().map(|&k| seq.joints[k]).collect();
+    let d = seq.joints.width();
+    let truth = Joints::from_slices(d, order.iter().map(|&k| &seq.joints[k]));
     let gather = |v: &[f32]| -> Vec<f32> {
         order
             .iter()
-            .flat_map(|&k| v[k * JOINTS..(k + 1) * JOINTS].to_vec())
+            .flat_map(|&k| v[k * d..(k + 1) * d].to_vec())
             .collect()
     };
     let (mean, sigma) = (
         gather(&e.prediction.joint_mean),
         gather(&e.prediction.joint_sigma),
     );
-    let observed: Vec<(f32, [f32; JOINTS])> = e
+    let observed: Vec<(f32, Vec<f32>)> = e
         .observed
         .iter()
-        .map(|&k| (e.shown.times[k], seq.joints[k]))
+        .map(|&k| (e.shown.times[k], seq.joints[k].to_vec()))
         .collect();
     let plot = JointPlot {
         times: &times,
@@ -132,7 +138,7 @@ pub fn eval_figure(e: &Evaluation, columns: usize, zoom: u32) -> Result<RgbImage
         mean: &mean,
         sigma: &sigma,
         observed: &observed,
-        names: JointPlot::NAMES,
+        names,
     };
     let joints = joint_plot(&plot, width, (width * 2 / 3).max(500))?;
     let mut out =

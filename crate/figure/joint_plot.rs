@@ -5,7 +5,7 @@ use plotters::prelude::*;
 use plotters::style::{register_font, FontStyle};
 
 use super::FigureError;
-use crate::data::JOINTS;
+use crate::data::Joints;
 
 static FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSansMono.ttf");
 static REGISTER: Once = Once::new();
@@ -18,56 +18,54 @@ pub(crate) fn register() {
     });
 }
 
-/// What a joint plot shows: one panel per joint over the phase `times`.
+/// What a joint plot shows: one panel per joint value over the phase `times` (D = the
+/// number of `names`).
 #[derive(Debug, Clone, Copy)]
 pub struct JointPlot<'a> {
     /// `T` phases of the predicted (and true) steps.
     pub times: &'a [f32],
-    /// `T × 7` true joint values, if known.
-    pub truth: Option<&'a [[f32; JOINTS]]>,
-    /// `T × 7` predicted mean.
+    /// `T × D` true joint values, if known.
+    pub truth: Option<&'a Joints>,
+    /// `T × D` predicted mean.
     pub mean: &'a [f32],
-    /// `T × 7` predicted σ (the band is mean ± 2σ).
+    /// `T × D` predicted σ (the band is mean ± 2σ).
     pub sigma: &'a [f32],
-    /// Observed steps: (phase, joints).
-    pub observed: &'a [(f32, [f32; JOINTS])],
-    /// Panel titles (7).
-    pub names: [&'a str; JOINTS],
-}
-
-impl JointPlot<'_> {
-    /// The conventional names: six arm angles (rad) and the gripper opening.
-    pub const NAMES: [&'static str; JOINTS] = [
-        "joint 1 (rad)",
-        "joint 2 (rad)",
-        "joint 3 (rad)",
-        "joint 4 (rad)",
-        "joint 5 (rad)",
-        "joint 6 (rad)",
-        "gripper",
-    ];
+    /// Observed steps: (phase, D joint values).
+    pub observed: &'a [(f32, Vec<f32>)],
+    /// Panel titles, one per joint value (a model's `ModelConfig::joint_labels`).
+    pub names: &'a [String],
 }
 
 /// Draws `plot` as a `width × height` RGB image: a 4 × 2 grid of panels, each with the true
 /// curve (black), the predicted mean (blue) inside its ±2σ band (light blue) and the observed
 /// points (red).
 pub fn joint_plot(plot: &JointPlot, width: u32, height: u32) -> Result<RgbImage, FigureError> {
-    let t = plot.times.len();
+    let (t, d) = (plot.times.len(), plot.names.len());
     for (what, len) in [("mean", plot.mean.len()), ("sigma", plot.sigma.len())] {
-        if len != t * JOINTS {
+        if d == 0 || len != t * d {
             return Err(FigureError::Input {
                 what,
-                reason: format!("holds {len} values, expected {t} steps × {JOINTS}"),
+                reason: format!("holds {len} values, expected {t} steps × {d} (one per name)"),
             });
         }
     }
     if let Some(truth) = plot.truth {
-        if truth.len() != t {
+        if truth.len() != t || truth.width() != d {
             return Err(FigureError::Input {
                 what: "truth",
-                reason: format!("holds {} steps, expected {t}", truth.len()),
+                reason: format!(
+                    "holds {} steps of {}, expected {t} of {d}",
+                    truth.len(),
+                    truth.width()
+                ),
             });
         }
+    }
+    if let Some((_, row)) = plot.observed.iter().find(|(_, r)| r.len() != d) {
+        return Err(FigureError::Input {
+            what: "observed",
+            reason: format!("a step of {} values, expected {d}", row.len()),
+        });
     }
     rendered(width, height, |root| draw(plot, root))
 }
@@ -100,13 +98,16 @@ fn draw(plot: &JointPlot, root: &Canvas) -> Result<(), Box<dyn std::error::Error
     let band = RGBColor(160, 190, 235);
     let mean_colour = RGBColor(31, 90, 180);
     let x_end = plot.times.iter().copied().fold(1.0f32, f32::max);
-    for (j, area) in root.split_evenly((4, 2)).iter().enumerate().take(JOINTS) {
+    let d = plot.names.len();
+    // Two panels a row, and one cell for the legend.
+    let grid = ((d + 1).div_ceil(2), 2);
+    for (j, area) in root.split_evenly(grid).iter().enumerate().take(d) {
         let value = |row: &[f32]| row[j];
-        let rows = |v: &'_ [f32]| -> Vec<f32> { v.chunks_exact(JOINTS).map(value).collect() };
+        let rows = |v: &'_ [f32]| -> Vec<f32> { v.chunks_exact(d).map(value).collect() };
         let (mean, sigma) = (rows(plot.mean), rows(plot.sigma));
         let truth: Vec<f32> = plot
             .truth
-            .map_or_else(Vec::new, |rows| rows.iter().map(|r| r[j]).collect());
+            .map_or_else(Vec::new, |rows| rows.rows().map(|r| r[j]).collect());
         let observed: Vec<(f32, f32)> = plot.observed.iter().map(|(t, r)| (*t, r[j])).collect();
         let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
         let values = mean
@@ -125,7 +126,7 @@ fn draw(plot: &JointPlot, root: &Canvas) -> Result<(), Box<dyn std::error::Error
         }
         let pad = 0.05 * (hi - lo);
         let mut chart = ChartBuilder::on(area)
-            .caption(plot.names[j], ("sans-serif", 14))
+            .caption(&plot.names[j], ("sans-serif", 14))
             .margin(6)
             .x_label_area_size(22)
             .y_label_area_size(46)
@@ -163,7 +164,7 @@ fn draw(plot: &JointPlot, root: &Canvas) -> Result<(), Box<dyn std::error::Error
         ))?;
         chart.draw_series(observed.iter().map(|&p| Circle::new(p, 4, RED.filled())))?;
     }
-    if let Some(legend) = root.split_evenly((4, 2)).last() {
+    if let Some(legend) = root.split_evenly(grid).get(d) {
         let style = ("sans-serif", 13).into_font();
         let lines = [
             ("true", BLACK),
@@ -189,14 +190,16 @@ mod tests {
         let times = [0.0, 0.5, 1.0];
         let mean = [0.1f32; 21];
         let sigma = [0.05f32; 21];
-        let truth = [[0.2f32; 7]; 3];
+        let truth = Joints::from_rows(&[[0.2f32; 7]; 3]);
+        let names = crate::model::ModelConfig::new(crate::model::ModelKind::Pte).joint_labels();
+        let observed = [(0.5, vec![0.2; 7])];
         let plot = JointPlot {
             times: &times,
             truth: Some(&truth),
             mean: &mean,
             sigma: &sigma,
-            observed: &[(0.5, [0.2; 7])],
-            names: JointPlot::NAMES,
+            observed: &observed,
+            names: &names,
         };
         let image = joint_plot(&plot, 400, 300).unwrap();
         assert_eq!(image.dimensions(), (400, 300));
@@ -209,5 +212,28 @@ mod tests {
             ..plot
         };
         assert!(joint_plot(&bad, 400, 300).is_err());
+        // Any number of joint values: three panels and the legend.
+        let names: Vec<String> = ["a", "b", "c"].map(String::from).to_vec();
+        let three = JointPlot {
+            times: &times,
+            truth: None,
+            mean: &mean[..9],
+            sigma: &sigma[..9],
+            observed: &[],
+            names: &names,
+        };
+        assert_eq!(
+            joint_plot(&three, 400, 300).unwrap().dimensions(),
+            (400, 300)
+        );
+        assert!(joint_plot(
+            &JointPlot {
+                mean: &mean,
+                ..three
+            },
+            400,
+            300
+        )
+        .is_err());
     }
 }

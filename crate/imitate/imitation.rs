@@ -1,20 +1,18 @@
 use super::joint_noise::joint_noise;
 use super::task::TaskSteps;
 use super::{ImitateError, Task};
-use crate::data::{Sequence, JOINTS};
+use crate::data::{Joints, Sequence};
 use crate::predict::{Observations, Predictor};
 use crate::quality::MeanMotion;
-use crate::sim::{perform, Action, Outcome, Trajectory};
-
-/// Arm joints among the [`JOINTS`] values (the last one is the gripper).
-pub(super) const ARM: usize = JOINTS - 1;
+use crate::sim::{perform, Action, Arm, Outcome, Trajectory};
 
 /// One performance of a demonstration's action: the trajectory the arm was given, what it
 /// did, and how that went.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Imitation {
-    /// The trajectory performed, one row per step of the demonstration.
-    pub trajectory: Vec<[f32; JOINTS]>,
+    /// The trajectory performed, one row per step of the demonstration, as wide as the
+    /// demonstration's joints (its width names the arm that performed it).
+    pub trajectory: Vec<Vec<f32>>,
     /// The recorded performance (frames, reached joints, object track).
     pub performance: Sequence,
     /// Judged against the demonstration.
@@ -25,7 +23,7 @@ pub struct Imitation {
     pub predicted_from: usize,
     /// Squared error of each arm joint (radians²) summed over the steps from
     /// `predicted_from` on, against the demonstration's recorded joints.
-    pub joint_se: [f64; ARM],
+    pub joint_se: Vec<f64>,
     /// How many steps `joint_se` sums over.
     pub joint_steps: usize,
 }
@@ -33,7 +31,10 @@ pub struct Imitation {
 impl Imitation {
     /// Root mean squared error of the trajectory's arm joints at its own steps (radians).
     pub fn joint_rmse(&self) -> f64 {
-        joint_rmse(self.joint_se.iter().sum(), self.joint_steps * ARM)
+        joint_rmse(
+            self.joint_se.iter().sum(),
+            self.joint_steps * self.joint_se.len(),
+        )
     }
 }
 
@@ -60,27 +61,28 @@ pub fn imitate(
     let observed = Observations::from_sequence(demo, &steps.observed)?;
     let times = demo.times();
     let predicted = predictor.predict_joints(&observed, &times[steps.predicted_from..], blend)?;
-    Ok(Some(act(demo, action, steps, predicted)?))
+    Ok(Some(act(demo, action, steps, arm_rows(&predicted)?)?))
 }
 
 /// The ceiling: the demonstration's own recorded joints performed.
 pub fn replay(demo: &Sequence, action: Action) -> Result<Imitation, ImitateError> {
-    enact(demo, action, demo.joints.clone(), Vec::new())
+    enact(demo, action, arm_rows(&demo.joints)?, Vec::new())
 }
 
 /// The arm performs `rows`, one per step of `demo` (joint means a model predicted from the
 /// demonstration's `observed` steps elsewhere: the page's workers), with the object where the
-/// demonstration had it, judged against it.
+/// demonstration had it, judged against it. The rows are as wide as the demonstration's.
 pub fn enact(
     demo: &Sequence,
     action: Action,
-    rows: Vec<[f32; JOINTS]>,
+    rows: Vec<impl AsRef<[f32]>>,
     observed: Vec<usize>,
 ) -> Result<Imitation, ImitateError> {
     let steps = TaskSteps {
         observed,
         predicted_from: 0,
     };
+    let rows = rows.iter().map(|r| r.as_ref().to_vec()).collect();
     act(demo, action, steps, rows)
 }
 
@@ -95,16 +97,16 @@ pub fn mean_motion(
     mean: &MeanMotion,
 ) -> Result<Option<Imitation>, ImitateError> {
     unobserved(demo, action, task, observations, |from| {
-        demo.times()[from..]
-            .iter()
-            .map(|&phase| {
-                mean.at(action.name(), phase).map(|(_, joints)| joints).ok_or_else(|| {
-                    ImitateError::Invalid(format!(
-                        "the mean motion has no {action} sequence: fit it on sequences of every action imitated"
-                    ))
-                })
-            })
-            .collect()
+        let mut rows = Joints::with_width(demo.joints.width());
+        for &phase in &demo.times()[from..] {
+            let (_, joints) = mean.at(action.name(), phase).ok_or_else(|| {
+                ImitateError::Invalid(format!(
+                    "the mean motion has no {action} sequence: fit it on sequences of every action imitated"
+                ))
+            })?;
+            rows.push(&joints);
+        }
+        arm_rows(&rows)
     })
 }
 
@@ -121,12 +123,14 @@ pub fn with_noise(
     seed: u64,
 ) -> Result<Option<Imitation>, ImitateError> {
     unobserved(demo, action, task, observations, |from| {
-        let noise = joint_noise(demo.len() - from, rmse, seed);
-        Ok(demo.joints[from..]
+        let recorded = arm_rows(&demo.joints)?;
+        let arm_joints = demo.joints.width() - 1;
+        let noise = joint_noise(demo.len() - from, arm_joints, rmse, seed);
+        Ok(recorded[from..]
             .iter()
             .zip(noise)
             .map(|(row, noise)| {
-                let mut row = *row;
+                let mut row = row.clone();
                 row.iter_mut().zip(noise).for_each(|(v, n)| *v += n);
                 row
             })
@@ -142,7 +146,7 @@ fn unobserved(
     action: Action,
     task: Task,
     observations: usize,
-    rows: impl FnOnce(usize) -> Result<Vec<[f32; JOINTS]>, ImitateError>,
+    rows: impl FnOnce(usize) -> Result<Vec<Vec<f32>>, ImitateError>,
 ) -> Result<Option<Imitation>, ImitateError> {
     let Some(steps) = task.steps(demo.len(), observations) else {
         return Ok(None);
@@ -161,9 +165,17 @@ fn act(
     demo: &Sequence,
     action: Action,
     steps: TaskSteps,
-    rows: Vec<[f32; JOINTS]>,
+    rows: Vec<Vec<f32>>,
 ) -> Result<Imitation, ImitateError> {
     let from = steps.predicted_from;
+    let recorded = arm_rows(&demo.joints)?;
+    let Some(object) = demo.object.as_ref().and_then(|o| o.first()) else {
+        return Err(ImitateError::Invalid(
+            "the demonstration has no object track (object_<id>.txt): imitation places the \
+             simulator's object where the demonstration had it, so it needs simulator data"
+                .into(),
+        ));
+    };
     if demo.is_empty() || rows.len() + from != demo.len() {
         return Err(ImitateError::Invalid(format!(
             "{} trajectory rows after {from} recorded ones for a demonstration of {} steps: \
@@ -172,17 +184,25 @@ fn act(
             demo.len()
         )));
     }
-    let trajectory: Vec<[f32; JOINTS]> = demo.joints[..from].iter().copied().chain(rows).collect();
-    let object = demo.object[0];
+    let width = demo.joints.width();
+    if let Some(row) = rows.iter().find(|r| r.len() != width) {
+        return Err(ImitateError::Invalid(format!(
+            "a trajectory row of {} values for a demonstration of {width} a step: expected rows \
+             as wide as the demonstration's",
+            row.len()
+        )));
+    }
+    let trajectory: Vec<Vec<f32>> = recorded[..from].iter().cloned().chain(rows).collect();
+    let joints = Joints::from_slices(width, trajectory.iter().map(Vec::as_slice));
     let performance = perform(
-        &Trajectory::new(trajectory.clone())?,
+        &Trajectory::of_joints(joints)?,
         [object[0], object[1]],
         demo.image_size,
     )?;
     let outcome = Outcome::judge(action, &performance, demo)
         .ok_or_else(|| ImitateError::Invalid("an empty demonstration".into()))?;
-    let mut joint_se = [0.0; ARM];
-    for (a, b) in trajectory[from..].iter().zip(&demo.joints[from..]) {
+    let mut joint_se = vec![0.0; width - 1];
+    for (a, b) in trajectory[from..].iter().zip(&recorded[from..]) {
         for (j, se) in joint_se.iter_mut().enumerate() {
             *se += (a[j] as f64 - b[j] as f64).powi(2);
         }
@@ -196,4 +216,20 @@ fn act(
         joint_se,
         joint_steps: demo.len() - from,
     })
+}
+
+/// `joints` as one of the simulator's arms takes them (its angles, then the gripper: 7 values
+/// a step the UR5, 8 the Panda): imitation performs the arm the width names, so data of
+/// another robot is refused, saying so.
+pub(super) fn arm_rows(joints: &Joints) -> Result<Vec<Vec<f32>>, ImitateError> {
+    if Arm::of_width(joints.width()).is_err() {
+        return Err(ImitateError::Invalid(format!(
+            "the trajectory has {} joint values a step: imitation performs the simulator's arms, \
+             which take {} (the angles, then the gripper): imitate needs the simulator's data \
+             and a model trained on it",
+            joints.width(),
+            Arm::widths_text()
+        )));
+    }
+    Ok(joints.rows().map(<[f32]>::to_vec).collect())
 }

@@ -4,7 +4,7 @@ use serde::Serialize;
 
 use crate::sim::{Action, PushMiss};
 
-use super::imitation::{joint_rmse, ARM};
+use super::imitation::joint_rmse;
 use super::{Imitation, Task};
 
 /// One row's performances of one action, summed over demonstrations.
@@ -18,7 +18,8 @@ pub struct OutcomeSums {
     object_error_cm: Vec<f32>,
     path_error_cm: Vec<f32>,
     misses: PushMisses,
-    joint_se: [f64; ARM],
+    /// Per arm joint (as many as the performances' arm has; none before the first).
+    joint_se: Vec<f64>,
     joint_steps: usize,
 }
 
@@ -34,7 +35,10 @@ impl OutcomeSums {
         if let (false, Some(e)) = (o.success, o.push_error_cm) {
             self.misses.add(e.miss());
         }
-        for (sum, se) in self.joint_se.iter_mut().zip(imitation.joint_se) {
+        if self.joint_se.len() < imitation.joint_se.len() {
+            self.joint_se.resize(imitation.joint_se.len(), 0.0);
+        }
+        for (sum, se) in self.joint_se.iter_mut().zip(&imitation.joint_se) {
             *sum += se;
         }
         self.joint_steps += imitation.joint_steps;
@@ -63,7 +67,10 @@ impl OutcomeSums {
             object_error_cm: median(&self.object_error_cm),
             path_error_cm: median(&self.path_error_cm),
             push_misses: (action == Action::Move.name()).then_some(self.misses),
-            joint_rmse: joint_rmse(self.joint_se.iter().sum(), self.joint_steps * ARM),
+            joint_rmse: joint_rmse(
+                self.joint_se.iter().sum(),
+                self.joint_steps * self.joint_se.len(),
+            ),
             joint_rmse_per_joint: self
                 .joint_se
                 .iter()

@@ -12,7 +12,7 @@ pub struct BatchTensors {
     pub image_size: usize,
     /// `[B, N, 3, S, S]`: context frames, RGB in [0, 1].
     pub context_images: Tensor<5>,
-    /// `[B, N, 7]`: context joints, normalised.
+    /// `[B, N, D]`: context joints, normalised.
     pub context_joints: Tensor<3>,
     /// `[B, N]`: context times (phase).
     pub context_times: Tensor<2>,
@@ -22,7 +22,7 @@ pub struct BatchTensors {
     pub target_times: Tensor<2>,
     /// `[B, M, 3, S, S]`: target frames, when the batch has them (training, evaluation).
     pub target_images: Option<Tensor<5>>,
-    /// `[B, M, 7]`: target joints, normalised, when the batch has them.
+    /// `[B, M, D]`: target joints, normalised, when the batch has them.
     pub target_joints: Option<Tensor<3>>,
     /// `[B]`: blending coefficient c of each sequence.
     pub blend: Tensor<1>,
@@ -51,12 +51,19 @@ impl BatchTensors {
 ///
 /// Target frames and joints may both be empty (inference: only target times are known).
 pub fn tensors(batch: &Batch, device: &Device) -> Result<BatchTensors, ModelError> {
-    let (b, n, m, s) = (batch.batch, batch.contexts, batch.targets, batch.image_size);
+    let (b, n, m, s, d) = (
+        batch.batch,
+        batch.contexts,
+        batch.targets,
+        batch.image_size,
+        batch.joints,
+    );
     for (field, value) in [
         ("batch", b),
         ("contexts", n),
         ("targets", m),
         ("image_size", s),
+        ("joints", d),
     ] {
         if value == 0 {
             return Err(ModelError::EmptyDimension { field });
@@ -73,8 +80,8 @@ pub fn tensors(batch: &Batch, device: &Device) -> Result<BatchTensors, ModelErro
     check(
         "context_joints",
         &batch.context_joints,
-        b * n * 7,
-        &format!("[B={b}, N={n}, 7]"),
+        b * n * d,
+        &format!("[B={b}, N={n}, D={d}]"),
     )?;
     check(
         "context_times",
@@ -109,8 +116,8 @@ pub fn tensors(batch: &Batch, device: &Device) -> Result<BatchTensors, ModelErro
         check(
             "target_joints",
             &batch.target_joints,
-            b * m * 7,
-            &format!("[B={b}, M={m}, 7]"),
+            b * m * d,
+            &format!("[B={b}, M={m}, D={d}]"),
         )?;
     }
 
@@ -133,20 +140,22 @@ pub fn tensors(batch: &Batch, device: &Device) -> Result<BatchTensors, ModelErro
     Ok(BatchTensors {
         image_size: s,
         context_images: tensor(&batch.context_images, [b, n, 3, s, s], device),
-        context_joints: tensor(&batch.context_joints, [b, n, 7], device),
+        context_joints: tensor(&batch.context_joints, [b, n, d], device),
         context_times: tensor(&batch.context_times, [b, n], device),
         context_mask: tensor(&batch.context_mask, [b, n], device),
         target_times: tensor(&batch.target_times, [b, m], device),
         target_images: has_target_images
             .then(|| tensor(&batch.target_images, [b, m, 3, s, s], device)),
-        target_joints: has_target_joints.then(|| tensor(&batch.target_joints, [b, m, 7], device)),
+        target_joints: has_target_joints.then(|| tensor(&batch.target_joints, [b, m, d], device)),
         blend: tensor(&batch.blend, [b], device),
     })
 }
 
-/// Checks joint-only targets and turns them into `[B, M_j]` times and `[B, M_j, 7]` joints.
+/// Checks joint-only targets of `d` values a step and turns them into `[B, M_j]` times and
+/// `[B, M_j, D]` joints.
 pub fn joint_target_tensors(
     targets: &JointTargets,
+    d: usize,
     device: &Device,
 ) -> Result<(Tensor<2>, Tensor<3>), ModelError> {
     let (b, m) = (targets.batch, targets.targets);
@@ -164,12 +173,12 @@ pub fn joint_target_tensors(
     check(
         "joint_target_joints",
         &targets.joints,
-        b * m * 7,
-        &format!("[B={b}, M={m}, 7]"),
+        b * m * d,
+        &format!("[B={b}, M={m}, D={d}]"),
     )?;
     Ok((
         tensor(&targets.times, [b, m], device),
-        tensor(&targets.joints, [b, m, 7], device),
+        tensor(&targets.joints, [b, m, d], device),
     ))
 }
 

@@ -100,6 +100,13 @@ pub struct ModelConfig {
     /// joints wherever the observations are frames only (blend 1). Absent (older files, or
     /// none fitted): the network's own joints.
     pub mirror: Option<usize>,
+    /// Joint values a step (D), read from the training data: sizes the joint encoder, the
+    /// joint decoder's heads, the attentive model's read-out and the mirror stage. Absent
+    /// (files written before other robots): 7, the original arm's.
+    pub joints: Option<usize>,
+    /// A name for each joint value (from the dataset's `dataset.json`); absent where the data
+    /// named none.
+    pub joint_names: Option<Vec<String>>,
 }
 
 impl ModelConfig {
@@ -107,6 +114,24 @@ impl ModelConfig {
     /// [0, 1) and a finite, non-negative joint weight.
     pub fn validate(&self) -> Result<(), ModelError> {
         self.image_encoder()?;
+        if self.joints == Some(0) {
+            return Err(ModelError::config(
+                "joints",
+                "is 0: expected the number of joint values a step (at least 1)",
+            ));
+        }
+        if let Some(names) = &self.joint_names {
+            if names.len() != self.joint_count() {
+                return Err(ModelError::config(
+                    "joint_names",
+                    format!(
+                        "holds {} names: expected one per joint value ({})",
+                        names.len(),
+                        self.joint_count()
+                    ),
+                ));
+            }
+        }
         if self.hidden == 0 {
             return Err(ModelError::config("hidden", "is 0: expected at least 1"));
         }
@@ -182,6 +207,28 @@ impl ModelConfig {
             ));
         }
         Ok(filters.clone())
+    }
+
+    /// Joint values a step (D): `joints`, or the original arm's 7 for files without it.
+    pub fn joint_count(&self) -> usize {
+        self.joints.unwrap_or(crate::data::JOINTS)
+    }
+
+    /// The joint values' names: `joint_names`, or `joint 0` … with the last called `gripper`
+    /// (the layout's convention) where the file has none.
+    pub fn joint_labels(&self) -> Vec<String> {
+        let d = self.joint_count();
+        self.joint_names.clone().unwrap_or_else(|| {
+            (0..d)
+                .map(|j| {
+                    if j + 1 == d && d > 1 {
+                        "gripper".to_string()
+                    } else {
+                        format!("joint {j}")
+                    }
+                })
+                .collect()
+        })
     }
 
     /// Heads of the attentive model's attention: `heads`, `ATTENTION_HEADS` (8) by default.
@@ -286,6 +333,26 @@ mod tests {
             .validate()
             .is_err());
         assert!(ModelConfig::new(ModelKind::Attn).validate().is_ok());
+        let err = ModelConfig::new(ModelKind::Pte)
+            .with_joints(Some(0))
+            .validate()
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("joints"), "{err}");
+        let err = ModelConfig::new(ModelKind::Pte)
+            .with_joints(Some(3))
+            .with_joint_names(Some(vec!["a".into(), "b".into()]))
+            .validate()
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("joint_names") && err.contains("(3)"), "{err}");
+        assert_eq!(ModelConfig::new(ModelKind::Pte).joint_count(), 7);
+        assert_eq!(
+            ModelConfig::new(ModelKind::Pte)
+                .with_joints(Some(3))
+                .joint_labels(),
+            ["joint 0", "joint 1", "gripper"]
+        );
         let narrow = |filters: Vec<usize>| {
             ModelConfig::new(ModelKind::Attn)
                 .with_decoder_filters(Some(filters))

@@ -24,6 +24,9 @@ pub struct DecoderConfig {
     /// Lower bound of every predicted σ.
     #[config(default = 0.01)]
     pub sigma_floor: f64,
+    /// Joint values a step (D).
+    #[config(default = 7)]
+    pub joints: usize,
     /// A gated image decoder (see [`ImageDecoder`]): the attentive model's.
     #[config(default = false)]
     pub gated: bool,
@@ -58,6 +61,7 @@ impl DecoderConfig {
                 .init(device),
             joint: JointDecoderConfig::new()
                 .with_input(self.shared)
+                .with_joints(self.joints)
                 .with_sigma_floor(self.sigma_floor)
                 .init(device),
         }
@@ -78,18 +82,18 @@ impl Decoder {
             image_mean: frames.mean.reshape([b, m, c, h, w]),
             image_sigma: frames.sigma.reshape([b, m, c, h, w]),
             image_drawn: frames.drawn.map(|d| d.reshape([b, m, c, h, w])),
-            joint_mean: joint_mean.reshape([b, m, 7]),
-            joint_sigma: joint_sigma.reshape([b, m, 7]),
+            joint_mean: per_target(joint_mean, b, m),
+            joint_sigma: per_target(joint_sigma, b, m),
         }
     }
 
-    /// Only the joints: `[B, M, input]` to their mean and σ, `[B, M, 7]` each.
+    /// Only the joints: `[B, M, input]` to their mean and σ, `[B, M, D]` each.
     pub fn joints(&self, x: Tensor<3>, start: Option<Start>) -> (Tensor<3>, Tensor<3>) {
         let [b, m, _] = x.dims();
         let (mean, sigma) = self
             .joint
             .forward(self.shared_layer(x), start.map(|s| s.joints()));
-        (mean.reshape([b, m, 7]), sigma.reshape([b, m, 7]))
+        (per_target(mean, b, m), per_target(sigma, b, m))
     }
 
     /// The shared Dense + ReLU, `[B, M, input]` to `[B·M, shared]`.
@@ -97,4 +101,10 @@ impl Decoder {
         let [b, m, input] = x.dims();
         relu(self.shared.forward(x.reshape([b * m, input])))
     }
+}
+
+/// `[B·M, D]` to `[B, M, D]`.
+fn per_target(x: Tensor<2>, b: usize, m: usize) -> Tensor<3> {
+    let d = x.dims()[1];
+    x.reshape([b, m, d])
 }

@@ -35,8 +35,11 @@ impl Dmbn {
             image_encoder: ImageEncoderConfig::new(4, config.image_encoder()?)
                 .with_hidden(hidden)
                 .init(device),
-            joint_encoder: JointEncoderConfig::new(8).with_hidden(hidden).init(device),
+            joint_encoder: JointEncoderConfig::new(config.joint_count() + 1)
+                .with_hidden(hidden)
+                .init(device),
             decoder: DecoderConfig::new(hidden + 1, blocks)
+                .with_joints(config.joint_count())
                 .with_image_tail(tail)
                 .with_image_coarse_tail(config.coarse_tail == Some(true))
                 .with_sigma_floor(config.sigma_floor)

@@ -11,7 +11,6 @@ use super::image_encoder::ImageEncoder;
 use super::joint_encoder::JointEncoder;
 use super::time_embedding::{TimeEmbedding, TimeEmbeddingConfig};
 use super::time_projection::TimeProjection;
-use crate::data::JOINTS;
 
 use super::{
     AttentiveContexts, BatchTensors, EncodedContexts, ModelConfig, ModelError, ModelKind,
@@ -61,7 +60,7 @@ pub struct DmbnAttn {
     pub start_projection: Linear,
     /// Shared layer, image and joint decoders.
     pub decoder: Decoder,
-    /// H → 7: the joints read from an image context encoding, where the joint decoder starts
+    /// H → D: the joints read from an image context encoding, where the joint decoder starts
     /// when joints are not observed (the mirror: frames only). None in files without it.
     pub frame_joints: Option<Linear>,
 }
@@ -92,9 +91,14 @@ impl DmbnAttn {
             image_attention: attention.init(device),
             joint_attention: attention.init(device),
             observed: Param::from_tensor(Tensor::zeros([2, hidden], device)),
-            start_projection: super::init::dense(START_FEATURES, hidden, device),
+            start_projection: super::init::dense(
+                start_features(config.joint_count()),
+                hidden,
+                device,
+            ),
             decoder: starting_at_the_observations(
                 DecoderConfig::new(hidden, blocks)
+                    .with_joints(config.joint_count())
                     .with_image_tail(tail)
                     .with_image_coarse_tail(config.coarse_tail == Some(true))
                     .with_sigma_floor(config.sigma_floor)
@@ -102,7 +106,7 @@ impl DmbnAttn {
                     .init(device),
             ),
             frame_joints: (config.frame_joints == Some(true))
-                .then(|| reading_nothing(hidden, device)),
+                .then(|| reading_nothing(hidden, config.joint_count(), device)),
         })
     }
 
@@ -112,17 +116,18 @@ impl DmbnAttn {
     pub fn reading_frame_joints(mut self, device: &Device) -> DmbnAttn {
         if self.frame_joints.is_none() {
             let hidden = self.start_projection.weight.dims()[1];
-            self.frame_joints = Some(reading_nothing(hidden, device));
+            let joints = self.decoder.joint.mean.weight.dims()[1];
+            self.frame_joints = Some(reading_nothing(hidden, joints, device));
         }
         self
     }
 }
 
-/// A read-out `hidden → 7` of zeros: joints read as the mean joints (0 normalised), where a
+/// A read-out `hidden → D` of zeros: joints read as the mean joints (0 normalised), where a
 /// model without one starts. Its weights still get gradient, from the encodings it reads.
-fn reading_nothing(hidden: usize, device: &Device) -> Linear {
-    let mut layer = super::init::dense(hidden, JOINTS, device);
-    layer.weight = Param::from_tensor(Tensor::zeros([hidden, JOINTS], device));
+fn reading_nothing(hidden: usize, joints: usize, device: &Device) -> Linear {
+    let mut layer = super::init::dense(hidden, joints, device);
+    layer.weight = Param::from_tensor(Tensor::zeros([hidden, joints], device));
     layer
 }
 
@@ -213,8 +218,10 @@ impl DmbnAttn {
     }
 }
 
-/// Size of [`Start::features`]: 7 joints and 2 gaps.
-const START_FEATURES: usize = 9;
+/// Size of [`Start::features`] for `d` joint values: the joints and 2 gaps.
+fn start_features(d: usize) -> usize {
+    d + 2
+}
 
 /// The joint mean head's starting scale against He's: the correction starts small.
 const JOINT_CORRECTION_SCALE: f64 = 0.1;

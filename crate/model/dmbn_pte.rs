@@ -53,6 +53,7 @@ impl DmbnPte {
             image_projection,
             joint_projection,
             decoder: DecoderConfig::new(config.hidden, blocks)
+                .with_joints(config.joint_count())
                 .with_image_tail(tail)
                 .with_image_coarse_tail(config.coarse_tail == Some(true))
                 .with_sigma_floor(config.sigma_floor)
@@ -119,7 +120,9 @@ pub(super) fn pte_encoders(
         image_encoder: ImageEncoderConfig::new(3, config.image_encoder()?)
             .with_hidden(hidden)
             .init(device),
-        joint_encoder: JointEncoderConfig::new(7).with_hidden(hidden).init(device),
+        joint_encoder: JointEncoderConfig::new(config.joint_count())
+            .with_hidden(hidden)
+            .init(device),
         time: TimeProjectionConfig::new().with_hidden(hidden).init(device),
         image_projection: projection.init(device),
         joint_projection: projection.init(device),

@@ -39,6 +39,8 @@ pub enum ModelError {
     Observation { field: &'static str, reason: String },
     #[error("batch: frames are {found}x{found}, but the model expects {expected}x{expected}")]
     ImageSize { expected: usize, found: usize },
+    #[error("joints: the data has {found} joint values a step, but the model was trained on {expected}: use a model trained on this robot's data")]
+    JointCount { expected: usize, found: usize },
     #[error("encoded contexts: {0}")]
     Contexts(String),
     #[error("decode: `target_times` is {found:?}, expected [{batch}, M] with M >= 1 for a representation of {batch} sequences")]

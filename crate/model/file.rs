@@ -91,7 +91,7 @@ pub fn save_bytes(
     normalization: &Normalization,
     half: bool,
 ) -> Result<Vec<u8>, ModelError> {
-    check_normalization(normalization)?;
+    check_normalization(normalization, model.joint_count())?;
     let mut store = BurnpackStore::from_bytes(None);
     if half {
         store = store.with_to_adapter(HalfPrecisionAdapter::new());
@@ -105,7 +105,7 @@ pub fn save_bytes(
     let header = ModelHeader {
         producer: format!("dmbn {}", env!("CARGO_PKG_VERSION")),
         config: model.config().clone(),
-        normalization: *normalization,
+        normalization: normalization.clone(),
         joint_sigma_scale: None,
         forecast_joint_sigma_scale: None,
         weights: WeightsInfo {
@@ -259,7 +259,7 @@ fn split(bytes: &[u8]) -> Result<(ModelHeader, &[u8]), ModelError> {
     let header: ModelHeader =
         serde_json::from_slice(header).map_err(|e| ModelError::Header(e.to_string()))?;
     header.config.validate()?;
-    check_normalization(&header.normalization)?;
+    check_normalization(&header.normalization, header.config.joint_count())?;
     check_joint_sigma_scale("joint_sigma_scale", header.joint_sigma_scale)?;
     check_joint_sigma_scale(
         "forecast_joint_sigma_scale",
@@ -325,8 +325,16 @@ fn hex(bytes: &[u8]) -> String {
     bytes.iter().map(|b| format!("{b:02x}")).collect()
 }
 
-/// Checks that every joint mean is finite and every standard deviation finite and positive.
-fn check_normalization(n: &Normalization) -> Result<(), ModelError> {
+/// Checks that there are `d` joint means and standard deviations, every mean finite and every
+/// standard deviation finite and positive.
+fn check_normalization(n: &Normalization, d: usize) -> Result<(), ModelError> {
+    if n.mean.len() != d || n.std.len() != d {
+        return Err(ModelError::Header(format!(
+            "normalization holds {} means and {} standard deviations: expected {d}, one per joint value of the model",
+            n.mean.len(),
+            n.std.len()
+        )));
+    }
     for (index, &value) in n.mean.iter().enumerate() {
         if !value.is_finite() {
             return Err(ModelError::Normalization {

@@ -19,17 +19,20 @@ pub struct JointDecoderConfig {
     /// Lower bound of the predicted σ.
     #[config(default = 0.01)]
     pub sigma_floor: f64,
+    /// Joint values a step (D): the heads' width.
+    #[config(default = 7)]
+    pub joints: usize,
 }
 
-/// The joint decoder: Dense 512, 216, 128, 32 (ReLU), then two linear Dense 7 heads: the
+/// The joint decoder: Dense 512, 216, 128, 32 (ReLU), then two linear Dense D heads: the
 /// mean (normalised joints) and σ (see [`bounded_sigma`]).
 #[derive(Module, Debug)]
 pub struct JointDecoder {
     /// The hidden dense layers.
     pub layers: Vec<Linear>,
-    /// 7-value mean head.
+    /// D-value mean head.
     pub mean: Linear,
-    /// 7-value σ head.
+    /// D-value σ head.
     pub sigma: Linear,
     /// Lower bound of σ.
     pub sigma_floor: f64,
@@ -49,8 +52,8 @@ impl JointDecoderConfig {
             .collect();
         JointDecoder {
             layers,
-            mean: super::init::dense(inputs, 7, device),
-            sigma: super::init::dense(inputs, 7, device),
+            mean: super::init::dense(inputs, self.joints, device),
+            sigma: super::init::dense(inputs, self.joints, device),
             sigma_floor: self.sigma_floor,
         }
     }

@@ -4,8 +4,8 @@ use burn::nn::Linear;
 use burn::tensor::activation::{gelu, softplus};
 use burn::tensor::{Device, Tensor, TensorData};
 
-use super::mirror_inputs::{mirror_inputs, MIRROR_INPUTS};
-use crate::data::JOINTS;
+use super::mirror_inputs::{mirror_input_len, mirror_inputs};
+use crate::data::Joints;
 
 /// Hidden layers of the stage's network.
 pub const MIRROR_LAYERS: usize = 3;
@@ -18,6 +18,9 @@ pub struct MirrorConfig {
     /// Width of each hidden layer.
     #[config(default = 256)]
     pub width: usize,
+    /// Joint values a step (D).
+    #[config(default = 7)]
+    pub joints: usize,
 }
 
 /// The mirror's second stage, in joint space: shown only frames (blend 1), the network reads
@@ -43,7 +46,8 @@ pub struct Mirror {
 impl MirrorConfig {
     /// A stage whose correction is zero: it predicts the interpolated reads.
     pub fn init(&self, device: &Device) -> Mirror {
-        let mut inputs = MIRROR_INPUTS;
+        let (d, features) = (self.joints, mirror_input_len(self.joints));
+        let mut inputs = features;
         let layers = (0..MIRROR_LAYERS)
             .map(|_| {
                 let layer = super::init::dense(inputs, self.width, device);
@@ -51,14 +55,13 @@ impl MirrorConfig {
                 layer
             })
             .collect();
-        let mut mean = super::init::dense(inputs, JOINTS, device);
-        mean.weight = Param::from_tensor(Tensor::zeros([inputs, JOINTS], device));
+        let mut mean = super::init::dense(inputs, d, device);
+        mean.weight = Param::from_tensor(Tensor::zeros([inputs, d], device));
         Mirror {
-            scale: Param::from_tensor(Tensor::ones([MIRROR_INPUTS], device))
-                .set_require_grad(false),
+            scale: Param::from_tensor(Tensor::ones([features], device)).set_require_grad(false),
             layers,
             mean,
-            sigma: super::init::dense(inputs, JOINTS, device),
+            sigma: super::init::dense(inputs, d, device),
         }
     }
 }
@@ -69,8 +72,13 @@ impl Mirror {
         self.mean.weight.dims()[0]
     }
 
-    /// `[M, MIRROR_INPUTS]` features and `[M, 7]` interpolated reads to the mean and σ joints,
-    /// `[M, 7]` each, in radians (and gripper units).
+    /// Joint values a step (D).
+    pub fn joints(&self) -> usize {
+        self.mean.weight.dims()[1]
+    }
+
+    /// `[M, mirror_input_len(D)]` features and `[M, D]` interpolated reads to the mean and σ
+    /// joints, `[M, D]` each, in joint units.
     pub fn forward(&self, x: Tensor<2>, start: Tensor<2>) -> (Tensor<2>, Tensor<2>) {
         let x = x / self.scale.val().unsqueeze::<2>();
         let h = self
@@ -87,22 +95,20 @@ impl Mirror {
     pub fn predict(
         &self,
         times: &[f32],
-        reads: &[[f32; JOINTS]],
+        reads: &Joints,
         targets: &[f32],
         device: &Device,
-    ) -> (Vec<[f32; JOINTS]>, Vec<[f32; JOINTS]>) {
-        let m = targets.len();
+    ) -> (Joints, Joints) {
+        let (m, d) = (targets.len(), reads.width());
         let (x, start) = mirror_inputs(times, reads, targets);
-        let x = Tensor::from_data(TensorData::new(x, [m, MIRROR_INPUTS]), device);
-        let start = Tensor::from_data(TensorData::new(start, [m, JOINTS]), device);
+        let x = Tensor::from_data(TensorData::new(x, [m, mirror_input_len(d)]), device);
+        let start = Tensor::from_data(TensorData::new(start, [m, d]), device);
         let (mean, sigma) = self.forward(x, start);
         (rows(mean), rows(sigma))
     }
 }
 
-fn rows(t: Tensor<2>) -> Vec<[f32; JOINTS]> {
-    super::values(t)
-        .chunks_exact(JOINTS)
-        .map(|r| std::array::from_fn(|j| r[j]))
-        .collect()
+fn rows(t: Tensor<2>) -> Joints {
+    let d = t.dims()[1];
+    Joints::new(d, super::values(t)).expect("rows of D values")
 }

@@ -1,34 +1,38 @@
 //! What the [`super::Mirror`] stage sees of a target time: the glimpses side by side and where
 //! the linear interpolation of their reads puts the joints there. Plain arrays, built the same
 //! way for training and for inference, natively and in wasm.
-use crate::data::JOINTS;
+use crate::data::Joints;
 
 /// Glimpses the stage sees at once: with more, each target sees the nearest in time.
 pub const MIRROR_SLOTS: usize = 8;
 /// Frequencies of the target phase's sine and cosine features (π·f·phase, f = 1…8).
 pub const MIRROR_FREQUENCIES: usize = 8;
-/// Values per slot: the read joints, the glimpse's time less the target's, 1 (the slot is
-/// filled).
-const SLOT: usize = JOINTS + 2;
-/// Input features per target: the slots, the interpolated reads, the phase and its
-/// sines and cosines.
-pub const MIRROR_INPUTS: usize = MIRROR_SLOTS * SLOT + JOINTS + 1 + 2 * MIRROR_FREQUENCIES;
+
+/// Values per slot for `d` joint values: the read joints, the glimpse's time less the
+/// target's, 1 (the slot is filled).
+fn slot_len(d: usize) -> usize {
+    d + 2
+}
+
+/// Input features per target for `d` joint values: the slots, the interpolated reads, the
+/// phase and its sines and cosines.
+pub fn mirror_input_len(d: usize) -> usize {
+    MIRROR_SLOTS * slot_len(d) + d + 1 + 2 * MIRROR_FREQUENCIES
+}
 
 /// The stage's inputs at `targets` (phases) for glimpses at `times` whose joints were read as
-/// `reads` (radians and the gripper value; any order, at least one): `MIRROR_INPUTS` features
-/// per target, and the reads linearly interpolated there (`JOINTS` per target; held constant
-/// beyond the first and the last glimpse), which the stage corrects.
-pub fn mirror_inputs(
-    times: &[f32],
-    reads: &[[f32; JOINTS]],
-    targets: &[f32],
-) -> (Vec<f32>, Vec<f32>) {
+/// `reads` (one row per glimpse, in joint units; any order, at least one):
+/// [`mirror_input_len`] features per target, and the reads linearly interpolated there (D per
+/// target; held constant beyond the first and the last glimpse), which the stage corrects.
+pub fn mirror_inputs(times: &[f32], reads: &Joints, targets: &[f32]) -> (Vec<f32>, Vec<f32>) {
     assert_eq!(times.len(), reads.len(), "one read per glimpse");
     assert!(!times.is_empty(), "at least one glimpse");
+    let d = reads.width();
+    let slot = slot_len(d);
     let mut order: Vec<usize> = (0..times.len()).collect();
     order.sort_by(|&a, &b| times[a].total_cmp(&times[b]));
-    let mut x = Vec::with_capacity(targets.len() * MIRROR_INPUTS);
-    let mut start = Vec::with_capacity(targets.len() * JOINTS);
+    let mut x = Vec::with_capacity(targets.len() * mirror_input_len(d));
+    let mut start = Vec::with_capacity(targets.len() * d);
     for &phase in targets {
         let interpolated = interpolate(&order, times, reads, phase);
         for &i in &slots(&order, times, phase) {
@@ -36,7 +40,7 @@ pub fn mirror_inputs(
             x.extend([times[i] - phase, 1.0]);
         }
         x.resize(
-            x.len() + (MIRROR_SLOTS - order.len().min(MIRROR_SLOTS)) * SLOT,
+            x.len() + (MIRROR_SLOTS - order.len().min(MIRROR_SLOTS)) * slot,
             0.0,
         );
         x.extend_from_slice(&interpolated);
@@ -67,38 +71,45 @@ fn slots(order: &[usize], times: &[f32], phase: f32) -> Vec<usize> {
 }
 
 /// The reads linearly interpolated at `phase` (`order`: the glimpses in time order).
-fn interpolate(
-    order: &[usize],
-    times: &[f32],
-    reads: &[[f32; JOINTS]],
-    phase: f32,
-) -> [f32; JOINTS] {
+fn interpolate(order: &[usize], times: &[f32], reads: &Joints, phase: f32) -> Vec<f32> {
     let (first, last) = (order[0], order[order.len() - 1]);
     if phase <= times[first] {
-        return reads[first];
+        return reads[first].to_vec();
     }
     if phase >= times[last] {
-        return reads[last];
+        return reads[last].to_vec();
     }
     let after = order.partition_point(|&i| times[i] <= phase);
     let (a, b) = (order[after - 1], order[after]);
     let w = (phase - times[a]) / (times[b] - times[a]);
-    std::array::from_fn(|j| reads[a][j] + w * (reads[b][j] - reads[a][j]))
+    reads[a]
+        .iter()
+        .zip(&reads[b])
+        .map(|(ra, rb)| ra + w * (rb - ra))
+        .collect()
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
+    const JOINTS: usize = crate::data::JOINTS;
+    const SLOT: usize = JOINTS + 2;
+    const MIRROR_INPUTS: usize = MIRROR_SLOTS * SLOT + JOINTS + 1 + 2 * MIRROR_FREQUENCIES;
+
     fn read(v: f32) -> [f32; JOINTS] {
         std::array::from_fn(|j| v + j as f32)
+    }
+
+    fn reads(rows: &[[f32; JOINTS]]) -> Joints {
+        Joints::from_rows(rows)
     }
 
     #[test]
     fn interpolates_between_glimpses_in_any_order_and_holds_beyond_them() {
         let (x, start) = mirror_inputs(
             &[1.0, 0.0, 0.5],
-            &[read(4.0), read(0.0), read(2.0)],
+            &reads(&[read(4.0), read(0.0), read(2.0)]),
             &[0.25, 0.75, 1.0, -0.5],
         );
         assert_eq!(x.len(), 4 * MIRROR_INPUTS);
@@ -110,7 +121,8 @@ mod tests {
 
     #[test]
     fn slots_are_in_time_order_then_zeros() {
-        let (x, _) = mirror_inputs(&[1.0, 0.0], &[read(4.0), read(0.0)], &[0.25]);
+        assert_eq!(mirror_input_len(JOINTS), MIRROR_INPUTS);
+        let (x, _) = mirror_inputs(&[1.0, 0.0], &reads(&[read(4.0), read(0.0)]), &[0.25]);
         assert_eq!(&x[..JOINTS], &read(0.0));
         assert_eq!(x[JOINTS..SLOT], [-0.25, 1.0]);
         assert_eq!(&x[SLOT..SLOT + JOINTS], &read(4.0));
@@ -129,8 +141,8 @@ mod tests {
     #[test]
     fn more_glimpses_than_slots_show_the_nearest() {
         let times: Vec<f32> = (0..12).map(|i| i as f32 / 11.0).collect();
-        let reads: Vec<_> = (0..12).map(|i| read(i as f32)).collect();
-        let (x, _) = mirror_inputs(&times, &reads, &[1.0]);
+        let rows: Vec<_> = (0..12).map(|i| read(i as f32)).collect();
+        let (x, _) = mirror_inputs(&times, &reads(&rows), &[1.0]);
         let first: Vec<f32> = x[..JOINTS].to_vec();
         assert_eq!(
             first,
@@ -140,5 +152,13 @@ mod tests {
         assert!(x[..MIRROR_SLOTS * SLOT]
             .chunks(SLOT)
             .all(|s| s[SLOT - 1] == 1.0));
+    }
+
+    #[test]
+    fn any_joint_count() {
+        let two = Joints::from_rows(&[[0.0f32, 1.0], [2.0, 3.0]]);
+        let (x, start) = mirror_inputs(&[0.0, 1.0], &two, &[0.5]);
+        assert_eq!(x.len(), mirror_input_len(2));
+        assert_eq!(start, [1.0, 2.0]);
     }
 }

@@ -72,7 +72,7 @@ pub use joint_encoder::{JointEncoder, JointEncoderConfig};
 pub use joint_sigma_scale::{within_span, JointSigmaScale};
 pub use loss::{gaussian_loss, joint_nll, Loss, LossValues};
 pub use mirror::{Mirror, MirrorConfig, MIRROR_LAYERS, MIRROR_SIGMA_FLOOR};
-pub use mirror_inputs::{mirror_inputs, MIRROR_FREQUENCIES, MIRROR_INPUTS, MIRROR_SLOTS};
+pub use mirror_inputs::{mirror_input_len, mirror_inputs, MIRROR_FREQUENCIES, MIRROR_SLOTS};
 pub use model::{Model, Network};
 pub use prediction::{AttentiveContexts, ContextEncodings, Prediction, Representation};
 #[cfg(not(target_arch = "wasm32"))]

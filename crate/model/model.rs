@@ -48,9 +48,12 @@ impl ModelConfig {
         };
         Ok(Model {
             network,
-            mirror: self
-                .mirror
-                .map(|width| MirrorConfig::new().with_width(width).init(device)),
+            mirror: self.mirror.map(|width| {
+                MirrorConfig::new()
+                    .with_width(width)
+                    .with_joints(self.joint_count())
+                    .init(device)
+            }),
             config: self.clone(),
         })
     }
@@ -131,6 +134,11 @@ impl Model {
         self.config.image_size
     }
 
+    /// Joint values a step (D) the model reads and predicts.
+    pub fn joint_count(&self) -> usize {
+        self.config.joint_count()
+    }
+
     /// Every context slot's encoding per modality, `[B, N, H]` each: the input of the
     /// paper's time-regression probe.
     pub fn encode_contexts(&self, batch: &BatchTensors) -> Result<ContextEncodings, ModelError> {
@@ -205,7 +213,7 @@ impl Model {
         Ok(self.decoder().forward(x, start))
     }
 
-    /// Only the joints' mean and σ at `[B, M]` target times, `[B, M, 7]` each: the image
+    /// Only the joints' mean and σ at `[B, M]` target times, `[B, M, D]` each: the image
     /// decoder, most of a target's cost, is skipped (training uses it to supervise the joints
     /// at many more steps than it decodes frames for).
     pub fn decode_joints(
@@ -319,6 +327,13 @@ impl Model {
             return Err(ModelError::ImageSize {
                 expected: self.config.image_size,
                 found: batch.image_size,
+            });
+        }
+        let found = batch.context_joints.dims()[2];
+        if found != self.joint_count() {
+            return Err(ModelError::JointCount {
+                expected: self.joint_count(),
+                found,
             });
         }
         Ok(())

@@ -87,7 +87,7 @@ impl Start {
         self.observed.clone()
     }
 
-    /// What the decoder is told about where it starts, `[B, M, 9]`: the interpolated joints
+    /// What the decoder is told about where it starts, `[B, M, D + 2]`: the interpolated joints
     /// (normalised; read from the frames, or 0, where not observed) and the gaps before and after each target, so that
     /// the correction it adds depends on what it corrects and on how far the observations are.
     pub fn features(&self) -> Tensor<3> {
@@ -109,18 +109,20 @@ impl Start {
         }
     }
 
-    /// The joints at the targets, `[B·M, 7]`, and the scale of the correction.
+    /// The joints at the targets, `[B·M, D]`, and the scale of the correction.
     pub fn joints(&self) -> JointStart {
         let [b, m, _] = self.weights.dims();
         // 1 − e^(−d / width) where the joints are observed, else 1.
         let scale = (self.nearness() * self.column(1)).neg().add_scalar(1.0);
         JointStart {
-            joints: self.interpolated_joints().reshape([b * m, 7]),
+            joints: self
+                .interpolated_joints()
+                .reshape([b * m, self.joints.dims()[2]]),
             scale: scale.reshape([b * m, 1]),
         }
     }
 
-    /// `[B, M, 7]`: the context joints interpolated to the targets, 0 where there are none.
+    /// `[B, M, D]`: the context joints interpolated to the targets, 0 where there are none.
     fn interpolated_joints(&self) -> Tensor<3> {
         self.weights.clone().matmul(self.joints.clone())
             * self.joints_known.clone().unsqueeze_dim::<3>(2)

@@ -21,5 +21,5 @@ pub struct Reads {
     /// The observed times (phases).
     pub times: Vec<f32>,
     /// The joints read at each, in radians (and gripper units).
-    pub joints: Vec<[f32; crate::data::JOINTS]>,
+    pub joints: crate::data::Joints,
 }

@@ -1,4 +1,4 @@
-use crate::data::{Sequence, JOINTS};
+use crate::data::Sequence;
 use crate::model::ModelError;
 
 /// What the model is shown: N context steps of one sequence, both modalities at the same
@@ -9,7 +9,7 @@ pub struct Observations {
     pub image_size: usize,
     /// `N × S × S × 3` bytes: RGB frames, rows top to bottom (as [`Sequence::frames`]).
     pub frames: Vec<u8>,
-    /// `N × 7`: joint values, not normalised.
+    /// `N × D`: joint values, not normalised.
     pub joints: Vec<f32>,
     /// `N`: the phase of each observed step.
     pub times: Vec<f32>,
@@ -31,10 +31,13 @@ impl Observations {
         let obs = Observations {
             image_size: seq.image_size as usize,
             frames: steps.iter().flat_map(|&k| seq.frame(k)).copied().collect(),
-            joints: steps.iter().flat_map(|&k| seq.joints[k]).collect(),
+            joints: steps
+                .iter()
+                .flat_map(|&k| seq.joints[k].iter().copied())
+                .collect(),
             times: steps.iter().map(|&k| times[k]).collect(),
         };
-        obs.check(obs.image_size)?;
+        obs.check(obs.image_size, seq.joints.width())?;
         Ok(obs)
     }
 
@@ -48,9 +51,10 @@ impl Observations {
         self.times.is_empty()
     }
 
-    /// Checks the set against a model for `image_size` frames: at least one context, and
-    /// frames, joints and times of matching lengths with finite values and times in [0, 1].
-    pub fn check(&self, image_size: usize) -> Result<(), ModelError> {
+    /// Checks the set against a model for `image_size` frames and `d` joint values a step: at
+    /// least one context, and frames, joints and times of matching lengths with finite values
+    /// and times in [0, 1].
+    pub fn check(&self, image_size: usize, d: usize) -> Result<(), ModelError> {
         let n = self.len();
         if n == 0 {
             return Err(ModelError::observation(
@@ -75,13 +79,13 @@ impl Observations {
                 ),
             ));
         }
-        if self.joints.len() != n * JOINTS {
+        if self.joints.len() != n * d {
             return Err(ModelError::observation(
                 "joints",
                 format!(
-                    "holds {} values, expected {n} steps × {JOINTS} = {}",
+                    "holds {} values, expected {n} steps × {d} = {} (the model's {d} joint values a step)",
                     self.joints.len(),
-                    n * JOINTS
+                    n * d
                 ),
             ));
         }

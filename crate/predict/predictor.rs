@@ -2,7 +2,7 @@ use burn::tensor::{Device, Tensor, TensorData};
 
 use super::{Encoding, Observations, Reads, SequencePrediction};
 use crate::augment::Batch;
-use crate::data::JOINTS;
+use crate::data::Joints;
 use crate::model::{
     self, tensors, within_span, EncodedContexts, JointSigmaScale, Model, ModelError, ModelKind,
     Normalization, Representation,
@@ -85,6 +85,11 @@ impl Predictor {
         &self.normalization
     }
 
+    /// Joint values a step (D) the model reads and predicts.
+    pub fn joint_count(&self) -> usize {
+        self.model.joint_count()
+    }
+
     /// What the decoders condition on (see [`Encoding`]) for `observations` with
     /// blending coefficient `blend`
     /// (1 = images only, 0 = joints only): [`Predictor::encode_contexts`], then
@@ -101,7 +106,7 @@ impl Predictor {
         &self,
         observations: &Observations,
     ) -> Result<EncodedContexts, ModelError> {
-        observations.check(self.model.image_size())?;
+        observations.check(self.model.image_size(), self.joint_count())?;
         let batch = self.batch(observations);
         self.model.encode_set(&tensors(&batch, &self.device)?)
     }
@@ -158,13 +163,14 @@ impl Predictor {
         target_times: &[f32],
     ) -> Result<SequencePrediction, ModelError> {
         check_times(target_times)?;
-        let mut out = SequencePrediction::empty(self.model.image_size());
+        let d = self.joint_count();
+        let mut out = SequencePrediction::empty(self.model.image_size(), d);
         for chunk in target_times.chunks(Self::CHUNK) {
             let p = self
                 .model
                 .decode(&encoding.representation, self.times(chunk))?;
             let mut joint_sigma = model::values(p.joint_sigma);
-            for (row, &t) in joint_sigma.chunks_exact_mut(JOINTS).zip(chunk) {
+            for (row, &t) in joint_sigma.chunks_exact_mut(d).zip(chunk) {
                 let scale = self.joint_sigma_scale.at(t, encoding.span);
                 row.iter_mut().for_each(|s| *s *= scale);
             }
@@ -172,7 +178,7 @@ impl Predictor {
             if let Some((mean, sigma)) = self.mirrored(encoding, chunk) {
                 for (k, &t) in chunk.iter().enumerate() {
                     if within_span(t, encoding.span) {
-                        let row = k * JOINTS..(k + 1) * JOINTS;
+                        let row = k * d..(k + 1) * d;
                         joint_mean[row.clone()]
                             .copy_from_slice(&self.normalization.normalize(&mean[k]));
                         for (j, s) in joint_sigma[row].iter_mut().enumerate() {
@@ -197,12 +203,7 @@ impl Predictor {
     /// `encoding` has reads for it; they stand between the first and the last observation
     /// (the stage interpolates), the network's beyond them. Its σ was fitted on reads of
     /// held-out sequences, so the file's σ scales (fitted to the network's σ) leave it as it is.
-    #[allow(clippy::type_complexity)]
-    fn mirrored(
-        &self,
-        encoding: &Encoding,
-        targets: &[f32],
-    ) -> Option<(Vec<[f32; JOINTS]>, Vec<[f32; JOINTS]>)> {
+    fn mirrored(&self, encoding: &Encoding, targets: &[f32]) -> Option<(Joints, Joints)> {
         let (mirror, reads) = (self.model.mirror.as_ref()?, encoding.reads.as_ref()?);
         Some(mirror.predict(&reads.times, &reads.joints, targets, &self.device))
     }
@@ -227,18 +228,22 @@ impl Predictor {
         observations: &Observations,
         target_times: &[f32],
         blend: f32,
-    ) -> Result<Vec<[f32; JOINTS]>, ModelError> {
+    ) -> Result<Joints, ModelError> {
         check_times(target_times)?;
         let encoding = self.encode(observations, blend)?;
-        let mut rows = self.network_joints(&encoding.representation, target_times)?;
-        if let Some((mean, _)) = self.mirrored(&encoding, target_times) {
-            for ((row, mirrored), &t) in rows.iter_mut().zip(mean).zip(target_times) {
-                if within_span(t, encoding.span) {
-                    *row = mirrored;
-                }
-            }
+        let rows = self.network_joints(&encoding.representation, target_times)?;
+        let Some((mean, _)) = self.mirrored(&encoding, target_times) else {
+            return Ok(rows);
+        };
+        let mut out = Joints::with_width(rows.width());
+        for (k, &t) in target_times.iter().enumerate() {
+            out.push(if within_span(t, encoding.span) {
+                &mean[k]
+            } else {
+                &rows[k]
+            });
         }
-        Ok(rows)
+        Ok(out)
     }
 
     /// The joint means the network itself decodes at `target_times` from `representation`
@@ -247,15 +252,15 @@ impl Predictor {
         &self,
         representation: &Representation,
         target_times: &[f32],
-    ) -> Result<Vec<[f32; JOINTS]>, ModelError> {
-        let mut rows = Vec::with_capacity(target_times.len());
+    ) -> Result<Joints, ModelError> {
+        let d = self.joint_count();
+        let mut rows = Joints::with_width(d);
         for chunk in target_times.chunks(Self::CHUNK) {
             let (mean, _) = self
                 .model
                 .decode_joints(representation, self.times(chunk))?;
-            for row in model::values(mean).chunks_exact(JOINTS) {
-                let row: [f32; JOINTS] = std::array::from_fn(|j| row[j]);
-                rows.push(self.normalization.denormalize(&row));
+            for row in model::values(mean).chunks_exact(d) {
+                rows.push(&self.normalization.denormalize(row));
             }
         }
         Ok(rows)
@@ -263,7 +268,7 @@ impl Predictor {
 
     /// The joints the network reads from frames alone (blend 1) at each observed time, in
     /// radians (and gripper units): what the mirror stage starts from, and learns from.
-    pub fn reads(&self, observations: &Observations) -> Result<Vec<[f32; JOINTS]>, ModelError> {
+    pub fn reads(&self, observations: &Observations) -> Result<Joints, ModelError> {
         let encoding = self.encode(observations, 1.0)?;
         match encoding.reads {
             // A model with a stage read them while encoding.
@@ -284,13 +289,16 @@ impl Predictor {
     /// at inference, and they are decoded separately; its blend is left at 0, as the blend
     /// is applied when the encodings are represented).
     fn batch(&self, observations: &Observations) -> Batch {
-        let (n, s) = (observations.len(), observations.image_size);
-        let mut batch = Batch::contexts_only(1, n, 1, s);
-        let rows = observations.joints.chunks_exact(JOINTS);
+        let (n, s, d) = (
+            observations.len(),
+            observations.image_size,
+            self.joint_count(),
+        );
+        let mut batch = Batch::contexts_only(1, n, 1, s, d);
+        let rows = observations.joints.chunks_exact(d);
         let frames = observations.frames.chunks_exact(3 * s * s);
         for (i, ((frame, row), &time)) in frames.zip(rows).zip(&observations.times).enumerate() {
-            let row: [f32; JOINTS] = std::array::from_fn(|j| row[j]);
-            batch.set_context(0, i, frame, self.normalization.normalize(&row), time);
+            batch.set_context(0, i, frame, &self.normalization.normalize(row), time);
         }
         batch
     }

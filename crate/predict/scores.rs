@@ -1,7 +1,7 @@
 use serde::Serialize;
 
 use super::SequencePrediction;
-use crate::data::{Normalization, JOINTS};
+use crate::data::{Joints, Normalization};
 
 /// How well a prediction matches the true sequence, averaged over every target step: the
 /// reconstruction error and Gaussian negative log-likelihood per value (nats) of each
@@ -22,10 +22,14 @@ impl Scores {
     pub fn of(
         prediction: &SequencePrediction,
         frames: &[u8],
-        joints: &[[f32; JOINTS]],
+        joints: &Joints,
         normalization: &Normalization,
     ) -> Option<Scores> {
-        if frames.len() != prediction.image_mean.len() || joints.len() != prediction.len() {
+        let d = normalization.width();
+        if frames.len() != prediction.image_mean.len()
+            || joints.len() != prediction.len()
+            || joints.width() != d
+        {
             return None;
         }
         let (image_mse, image_nll) = gaussian(
@@ -37,13 +41,13 @@ impl Scores {
         );
         let (joint_mse, joint_nll) = gaussian(
             joints
+                .values()
                 .iter()
-                .flatten()
                 .zip(&prediction.joint_mean)
                 .zip(&prediction.joint_sigma)
                 .enumerate()
                 .map(|(i, ((&x, &m), &s))| {
-                    let std = normalization.std[i % JOINTS] as f64;
+                    let std = normalization.std[i % d] as f64;
                     (x as f64 / std, m as f64 / std, s as f64 / std)
                 }),
         );
@@ -73,11 +77,13 @@ fn gaussian(values: impl Iterator<Item = (f64, f64, f64)>) -> (f64, f64) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::data::JOINTS;
 
     #[test]
     fn perfect_mean_scores_zero_error() {
         let prediction = SequencePrediction {
             image_size: 1,
+            joints: JOINTS,
             times: vec![0.0],
             image_mean: vec![1.0, 0.0, 0.0],
             image_sigma: vec![1.0; 3],
@@ -85,10 +91,16 @@ mod tests {
             joint_sigma: vec![2.0; 7],
         };
         let norm = Normalization {
-            mean: [0.0; 7],
-            std: [2.0; 7],
+            mean: vec![0.0; 7],
+            std: vec![2.0; 7],
         };
-        let s = Scores::of(&prediction, &[255, 0, 0], &[[2.0; 7]], &norm).unwrap();
+        let s = Scores::of(
+            &prediction,
+            &[255, 0, 0],
+            &Joints::from_rows(&[[2.0; 7]]),
+            &norm,
+        )
+        .unwrap();
         let half_log_2pi = 0.5 * (2.0 * std::f64::consts::PI).ln();
         assert_eq!(s.image_mse, 0.0);
         assert!((s.image_nll - half_log_2pi).abs() < 1e-12);
@@ -96,7 +108,7 @@ mod tests {
             (s.joint_nll - half_log_2pi).abs() < 1e-12,
             "σ 2 / std 2 = 1"
         );
-        assert!(Scores::of(&prediction, &[0; 6], &[[2.0; 7]], &norm).is_none());
+        assert!(Scores::of(&prediction, &[0; 6], &Joints::from_rows(&[[2.0; 7]]), &norm).is_none());
     }
 
     /// Gaussian NLL of one value `d` away from the mean, σ `s`: the definition.
@@ -118,8 +130,8 @@ mod tests {
         // Joints: a different std per column (and a mean), and per value the error z and σ r
         // in normalised units; the prediction is in dataset units (x + std·z, σ std·r).
         let norm = Normalization {
-            mean: [1.0, -2.0, 0.5, 3.0, 0.0, -1.0, 2.0],
-            std: [0.5, 2.0, 4.0, 0.25, 8.0, 1.0, 0.125],
+            mean: vec![1.0, -2.0, 0.5, 3.0, 0.0, -1.0, 2.0],
+            std: vec![0.5, 2.0, 4.0, 0.25, 8.0, 1.0, 0.125],
         };
         let truth = [
             [0.25f32, -1.5, 2.0, 3.5, -4.0, 0.75, 2.5],
@@ -144,13 +156,14 @@ mod tests {
         }
         let prediction = SequencePrediction {
             image_size: 1,
+            joints: JOINTS,
             times: vec![0.0, 1.0],
             image_mean: image_mean.to_vec(),
             image_sigma: image_sigma.to_vec(),
             joint_mean,
             joint_sigma,
         };
-        let s = Scores::of(&prediction, &frames, &truth, &norm).unwrap();
+        let s = Scores::of(&prediction, &frames, &Joints::from_rows(&truth), &norm).unwrap();
 
         let pixels = || {
             (0..6).map(|i| {

@@ -1,5 +1,5 @@
 use super::{heat_map, pixel_sigma};
-use crate::data::{Normalization, JOINTS};
+use crate::data::Normalization;
 
 /// The predicted Gaussian at T target times, in dataset units: frames as interleaved RGB in
 /// [0, 1] (rows top to bottom, like [`crate::data::Sequence::frames`]), joints in radians
@@ -8,25 +8,38 @@ use crate::data::{Normalization, JOINTS};
 pub struct SequencePrediction {
     /// S: frame width and height.
     pub image_size: usize,
+    /// D: joint values a step.
+    pub joints: usize,
     /// `T`: the target times.
     pub times: Vec<f32>,
     /// `T × S × S × 3`: mean frames.
     pub image_mean: Vec<f32>,
     /// `T × S × S × 3`: σ of every pixel channel.
     pub image_sigma: Vec<f32>,
-    /// `T × 7`: mean joints.
+    /// `T × D`: mean joints.
     pub joint_mean: Vec<f32>,
-    /// `T × 7`: σ of every joint.
+    /// `T × D`: σ of every joint.
     pub joint_sigma: Vec<f32>,
 }
 
 impl SequencePrediction {
-    /// No targets yet.
-    pub fn empty(image_size: usize) -> Self {
+    /// No targets yet, for frames of `image_size` pixels a side and `joints` values a step.
+    pub fn empty(image_size: usize, joints: usize) -> Self {
         SequencePrediction {
             image_size,
+            joints,
             ..Default::default()
         }
+    }
+
+    /// The mean joints of step `k`.
+    pub fn joint_mean_at(&self, k: usize) -> &[f32] {
+        &self.joint_mean[k * self.joints..(k + 1) * self.joints]
+    }
+
+    /// The joint σ of step `k`.
+    pub fn joint_sigma_at(&self, k: usize) -> &[f32] {
+        &self.joint_sigma[k * self.joints..(k + 1) * self.joints]
     }
 
     /// T: predicted steps.
@@ -113,14 +126,11 @@ impl SequencePrediction {
                 }
             }
         }
-        for (mean, sigma) in joint_mean
-            .chunks_exact(JOINTS)
-            .zip(joint_sigma.chunks_exact(JOINTS))
-        {
-            let mean: [f32; JOINTS] = std::array::from_fn(|j| mean[j]);
-            self.joint_mean.extend(normalization.denormalize(&mean));
+        let d = self.joints;
+        for (mean, sigma) in joint_mean.chunks_exact(d).zip(joint_sigma.chunks_exact(d)) {
+            self.joint_mean.extend(normalization.denormalize(mean));
             self.joint_sigma
-                .extend(sigma.iter().zip(normalization.std).map(|(s, std)| s * std));
+                .extend(sigma.iter().zip(&normalization.std).map(|(s, std)| s * std));
         }
     }
 }
@@ -143,6 +153,7 @@ fn byte(v: f32) -> u8 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::data::JOINTS;
     use crate::predict::heat_map_rgb;
 
     #[test]
@@ -152,7 +163,7 @@ mod tests {
             times: vec![0.0, 1.0],
             image_mean: vec![0.0, 0.5, 2.0, 1.0, -1.0, 0.25],
             image_sigma: vec![0.25, 0.5, 0.75, 0.125, 0.125, 0.125],
-            ..SequencePrediction::empty(1)
+            ..SequencePrediction::empty(1, JOINTS)
         };
         assert_eq!(p.pixel_sigma(), vec![0.5, 0.125]);
         // The mean of the channels, not the largest channel (0.75).
@@ -161,7 +172,7 @@ mod tests {
         assert_eq!(p.sigma_map(1, p.max_image_sigma()), heat_map_rgb(0.25));
         assert_eq!(p.mean_frames(), vec![0, 128, 255, 255, 0, 64]);
         assert_eq!(p.mean_frames()[3..], p.mean_frame(1));
-        assert_eq!(SequencePrediction::empty(4).max_image_sigma(), 0.0);
+        assert_eq!(SequencePrediction::empty(4, JOINTS).max_image_sigma(), 0.0);
     }
 
     #[test]

@@ -2,10 +2,7 @@ use serde::{Deserialize, Serialize};
 
 use super::calibration::{Calibration, Coverage, MOVING};
 use super::is_object;
-use crate::data::JOINTS;
-
-/// Arm joints (radians) among the [`JOINTS`] values; the last one is the gripper.
-const ARM: usize = JOINTS - 1;
+use crate::data::arm_joints;
 
 /// Sums of errors over the steps of one or more sequences, pooled so that every step weighs
 /// the same; [`Accumulator::finish`] turns them into a [`Quality`].
@@ -14,11 +11,14 @@ pub struct Accumulator {
     sequences: usize,
     steps: usize,
     joint_se: f64,
+    joint_values: usize,
+    grippers: usize,
     gripper_ae: f64,
     image_se: f64,
     image_values: usize,
     observed_steps: usize,
     observed_joint_se: f64,
+    observed_joint_values: usize,
     observed_image_se: f64,
     observed_image_values: usize,
     image_nll: f64,
@@ -51,7 +51,7 @@ pub struct Sigma<'a> {
     pub joints: &'a [f32],
     /// The joints' standard deviations: NLL and joint coverage are per value in normalised
     /// joint units, as in training.
-    pub std: &'a [f32; JOINTS],
+    pub std: &'a [f32],
     /// The nearest observation's frame (RGB in [0, 1]): pixels that differ from it moved.
     pub nearest: &'a [f32],
 }
@@ -63,9 +63,11 @@ pub struct Quality {
     pub sequences: usize,
     /// Scored steps over all sequences.
     pub steps: usize,
-    /// Root mean squared error of the 6 arm joints over the scored steps, radians.
+    /// Root mean squared error of the arm joints (all joint values but the gripper, the
+    /// last) over the scored steps, radians.
     pub joint_rmse: f64,
-    /// Mean absolute error of the gripper value over the scored steps (dataset units).
+    /// Mean absolute error of the gripper value over the scored steps (dataset units; NaN
+    /// for a robot of one joint value, which has none).
     pub gripper_mae: f64,
     /// Mean squared error of the frames over the scored steps, pixels in [0, 1].
     pub image_mse: f64,
@@ -101,11 +103,13 @@ impl Accumulator {
         &mut self,
         guess: Guess,
         frame: &[u8],
-        joints: &[f32; JOINTS],
+        joints: &[f32],
         observed: bool,
         scored: bool,
     ) {
-        let joint_se: f64 = (0..ARM)
+        let d = joints.len();
+        let arm = arm_joints(d);
+        let joint_se: f64 = (0..arm)
             .map(|j| (guess.joints[j] as f64 - joints[j] as f64).powi(2))
             .sum();
         let image_se: f64 = frame
@@ -117,6 +121,7 @@ impl Accumulator {
         if observed {
             self.observed_steps += 1;
             self.observed_joint_se += joint_se;
+            self.observed_joint_values += arm;
             self.observed_image_se += image_se;
             self.observed_image_values += frame.len();
             self.observed_object_intersection += intersection;
@@ -127,7 +132,11 @@ impl Accumulator {
         }
         self.steps += 1;
         self.joint_se += joint_se;
-        self.gripper_ae += (guess.joints[ARM] as f64 - joints[ARM] as f64).abs();
+        self.joint_values += arm;
+        if arm < d {
+            self.grippers += 1;
+            self.gripper_ae += (guess.joints[arm] as f64 - joints[arm] as f64).abs();
+        }
         self.image_se += image_se;
         self.image_values += frame.len();
         self.object_intersection += intersection;
@@ -145,7 +154,7 @@ impl Accumulator {
                 .map(|((&x, &m), &s)| nll(x as f64 / 255.0, m as f64, s as f64))
                 .sum::<f64>()
                 / frame.len() as f64;
-            self.joint_nll += (0..JOINTS)
+            self.joint_nll += (0..d)
                 .map(|j| {
                     let std = std[j] as f64;
                     nll(
@@ -155,12 +164,12 @@ impl Accumulator {
                     )
                 })
                 .sum::<f64>()
-                / JOINTS as f64;
+                / d as f64;
         }
     }
 
     /// Counts how often the truth lies within the guess's σ bands.
-    fn cover(&mut self, guess: Guess, sigma: Sigma, frame: &[u8], joints: &[f32; JOINTS]) {
+    fn cover(&mut self, guess: Guess, sigma: Sigma, frame: &[u8], joints: &[f32]) {
         for (j, truth) in joints.iter().enumerate() {
             let std = sigma.std[j] as f64;
             let error = (truth - guess.joints[j]) as f64 / std;
@@ -191,11 +200,14 @@ impl Accumulator {
         self.sequences += other.sequences;
         self.steps += other.steps;
         self.joint_se += other.joint_se;
+        self.joint_values += other.joint_values;
+        self.grippers += other.grippers;
         self.gripper_ae += other.gripper_ae;
         self.image_se += other.image_se;
         self.image_values += other.image_values;
         self.observed_steps += other.observed_steps;
         self.observed_joint_se += other.observed_joint_se;
+        self.observed_joint_values += other.observed_joint_values;
         self.observed_image_se += other.observed_image_se;
         self.observed_image_values += other.observed_image_values;
         self.image_nll += other.image_nll;
@@ -217,10 +229,10 @@ impl Accumulator {
         Quality {
             sequences: self.sequences,
             steps: self.steps,
-            joint_rmse: div(self.joint_se, self.steps * ARM).sqrt(),
-            gripper_mae: div(self.gripper_ae, self.steps),
+            joint_rmse: div(self.joint_se, self.joint_values).sqrt(),
+            gripper_mae: div(self.gripper_ae, self.grippers),
             image_mse: div(self.image_se, self.image_values),
-            observed_joint_rmse: div(self.observed_joint_se, self.observed_steps * ARM).sqrt(),
+            observed_joint_rmse: div(self.observed_joint_se, self.observed_joint_values).sqrt(),
             observed_image_mse: div(self.observed_image_se, self.observed_image_values),
             image_nll: (self.nll_steps > 0).then(|| self.image_nll / self.nll_steps as f64),
             joint_nll: (self.nll_steps > 0).then(|| self.joint_nll / self.nll_steps as f64),
@@ -260,6 +272,7 @@ fn nll(x: f64, m: f64, s: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::data::JOINTS;
 
     #[test]
     fn errors_are_pooled_per_step_and_split_by_role() {

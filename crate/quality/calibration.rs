@@ -1,7 +1,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::Scenario;
-use crate::data::{Sequence, JOINTS};
+use crate::data::Sequence;
 use crate::model::ModelError;
 use crate::predict::{Observations, Predictor};
 
@@ -146,8 +146,9 @@ pub fn joint_z_scores(
         } else {
             &mut z.forecast
         };
-        for j in 0..JOINTS {
-            let i = k * JOINTS + j;
+        let d = seq.joints.width();
+        for j in 0..d {
+            let i = k * d + j;
             let error = (seq.joints[k][j] - prediction.joint_mean[i]).abs() as f64;
             side.push(error / prediction.joint_sigma[i] as f64);
         }

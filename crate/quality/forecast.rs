@@ -1,9 +1,8 @@
 //! The benchmark's measures of a forecast given as byte frames, as the page draws it (live mode).
 use super::accumulator::Guess;
 use super::{Accumulator, Quality};
-use crate::data::JOINTS;
 
-/// Scores `frames` (RGB bytes, steps × S × S × 3) and `joints` (steps × [`JOINTS`]) guessed for
+/// Scores `frames` (RGB bytes, steps × S × S × 3) and `joints` (steps × `d`) guessed for
 /// a run of steps against the true `true_frames` and `true_joints` of the same steps, every
 /// step scored (joint RMSE over the arm joints in radians, image MSE in [0, 1], object IoU).
 /// Fails, naming the argument, when the layouts disagree or there is no step.
@@ -12,11 +11,12 @@ pub fn score_steps(
     true_joints: &[f32],
     frames: &[u8],
     joints: &[f32],
+    d: usize,
 ) -> Result<Quality, String> {
-    let steps = true_joints.len() / JOINTS;
-    if steps == 0 || true_joints.len() % JOINTS != 0 {
+    let steps = true_joints.len() / d.max(1);
+    if d == 0 || steps == 0 || true_joints.len() % d != 0 {
         return Err(format!(
-            "trueJoints: {} values, expected a positive multiple of {JOINTS}",
+            "trueJoints: {} values, expected a positive multiple of {d} (the joint values a step)",
             true_joints.len()
         ));
     }
@@ -48,12 +48,10 @@ pub fn score_steps(
         for (g, &v) in guess.iter_mut().zip(&frames[k * px..(k + 1) * px]) {
             *g = v as f32 / 255.0;
         }
-        let truth: &[f32; JOINTS] = true_joints[k * JOINTS..(k + 1) * JOINTS]
-            .try_into()
-            .expect("a slice of JOINTS values");
+        let truth = &true_joints[k * d..(k + 1) * d];
         let guess = Guess {
             frame: &guess,
-            joints: &joints[k * JOINTS..(k + 1) * JOINTS],
+            joints: &joints[k * d..(k + 1) * d],
             sigma: None,
         };
         acc.add(
@@ -70,6 +68,7 @@ pub fn score_steps(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::data::JOINTS;
 
     #[test]
     fn scores_the_difference_and_names_bad_layouts() {
@@ -79,20 +78,20 @@ mod tests {
         let guess = vec![151u8; 2 * 12];
         let joints = vec![0.5f32; 2 * JOINTS];
         let guessed: Vec<f32> = joints.iter().map(|v| v + 0.1).collect();
-        let q = score_steps(&truth, &joints, &guess, &guessed).unwrap();
+        let q = score_steps(&truth, &joints, &guess, &guessed, JOINTS).unwrap();
         assert_eq!(q.steps, 2);
         assert!((q.image_mse - 0.04).abs() < 1e-6, "{}", q.image_mse);
         assert!((q.joint_rmse - 0.1).abs() < 1e-6, "{}", q.joint_rmse);
-        assert!(score_steps(&truth, &joints, &guess[1..], &guessed)
+        assert!(score_steps(&truth, &joints, &guess[1..], &guessed, JOINTS)
             .unwrap_err()
             .starts_with("frames:"));
-        assert!(score_steps(&truth, &joints, &guess, &guessed[1..])
+        assert!(score_steps(&truth, &joints, &guess, &guessed[1..], JOINTS)
             .unwrap_err()
             .starts_with("joints:"));
-        assert!(score_steps(&truth[1..], &joints, &guess, &guessed)
+        assert!(score_steps(&truth[1..], &joints, &guess, &guessed, JOINTS)
             .unwrap_err()
             .starts_with("trueFrames:"));
-        assert!(score_steps(&truth, &[], &guess, &[])
+        assert!(score_steps(&truth, &[], &guess, &[], JOINTS)
             .unwrap_err()
             .starts_with("trueJoints:"));
     }

@@ -1,6 +1,6 @@
 use std::collections::BTreeMap;
 
-use crate::data::{Sequence, JOINTS};
+use crate::data::Sequence;
 
 /// Phase bins of a [`MeanMotion`].
 const BINS: usize = 101;
@@ -18,26 +18,29 @@ pub struct MeanMotion {
 struct Motion {
     /// `BINS × frame_len`: mean frames, RGB in [0, 1].
     frames: Vec<f32>,
-    /// `BINS`: mean joints.
-    joints: Vec<[f32; JOINTS]>,
+    /// `BINS × D`: mean joints.
+    joints: Vec<Vec<f32>>,
 }
 
 impl MeanMotion {
     /// The mean motion of every action among `sequences` (action name, sequence), all of one
-    /// frame size. `None` when there is no sequence or frame sizes differ.
+    /// frame size and joint count. `None` when there is no sequence or sizes differ.
     pub fn fit<'a>(sequences: impl IntoIterator<Item = (&'a str, &'a Sequence)>) -> Option<Self> {
         // Per action: summed frames, summed joints, sequences.
-        type Sums = (Vec<f64>, Vec<[f64; JOINTS]>, usize);
+        type Sums = (Vec<f64>, Vec<Vec<f64>>, usize);
         let mut sums: BTreeMap<String, Sums> = BTreeMap::new();
         let mut frame_len = None;
         for (action, seq) in sequences {
             if seq.is_empty() || *frame_len.get_or_insert(seq.frame_bytes()) != seq.frame_bytes() {
                 return None;
             }
-            let n = seq.frame_bytes();
+            let (n, d) = (seq.frame_bytes(), seq.joints.width());
             let entry = sums
                 .entry(action.to_string())
-                .or_insert_with(|| (vec![0.0; BINS * n], vec![[0.0; JOINTS]; BINS], 0));
+                .or_insert_with(|| (vec![0.0; BINS * n], vec![vec![0.0; d]; BINS], 0));
+            if entry.1[0].len() != d {
+                return None;
+            }
             entry.2 += 1;
             let last = (seq.len() - 1) as f64;
             for bin in 0..BINS {
@@ -48,7 +51,7 @@ impl MeanMotion {
                 }
                 let (lo, hi) = (x.floor() as usize, x.ceil() as usize);
                 let w = x - lo as f64;
-                for j in 0..JOINTS {
+                for j in 0..d {
                     let (a, b) = (seq.joints[lo][j] as f64, seq.joints[hi][j] as f64);
                     entry.1[bin][j] += a + w * (b - a);
                 }
@@ -62,7 +65,7 @@ impl MeanMotion {
                     frames: frames.iter().map(|&v| (v / c) as f32).collect(),
                     joints: joints
                         .iter()
-                        .map(|row| std::array::from_fn(|j| (row[j] / c) as f32))
+                        .map(|row| row.iter().map(|v| (v / c) as f32).collect())
                         .collect(),
                 };
                 (action, motion)
@@ -76,16 +79,17 @@ impl MeanMotion {
 
     /// The mean frame and joints of `action` at `phase` in [0, 1]; `None` for an action the
     /// fit did not see.
-    pub fn at(&self, action: &str, phase: f32) -> Option<(&[f32], [f32; JOINTS])> {
+    pub fn at(&self, action: &str, phase: f32) -> Option<(&[f32], Vec<f32>)> {
         let motion = self.actions.get(action)?;
         let x = phase.clamp(0.0, 1.0) as f64 * (BINS - 1) as f64;
         let bin = x.round() as usize;
         let (lo, hi) = (x.floor() as usize, x.ceil() as usize);
         let w = (x - lo as f64) as f32;
-        let joints = std::array::from_fn(|j| {
-            let (a, b) = (motion.joints[lo][j], motion.joints[hi][j]);
-            a + w * (b - a)
-        });
+        let joints = motion.joints[lo]
+            .iter()
+            .zip(&motion.joints[hi])
+            .map(|(a, b)| a + w * (b - a))
+            .collect();
         let n = self.frame_len;
         Some((&motion.frames[bin * n..(bin + 1) * n], joints))
     }
@@ -94,13 +98,14 @@ impl MeanMotion {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::data::JOINTS;
 
     fn sequence(len: usize, value: u8, joint: f32) -> Sequence {
         Sequence {
             image_size: 1,
             joints: (0..len).map(|k| [joint * k as f32; JOINTS]).collect(),
-            endpoint: vec![[0.0; 7]; len],
-            object: vec![[0.0; 3]; len],
+            endpoint: Some(vec![[0.0; 7]; len]),
+            object: Some(vec![[0.0; 3]; len]),
             frames: vec![value; len * 3],
         }
     }

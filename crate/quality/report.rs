@@ -2,7 +2,7 @@ use serde::Serialize;
 
 use super::accumulator::{Guess, Sigma};
 use super::{Accumulator, CoverageSummary, MeanMotion, Quality, Scenario};
-use crate::data::{Sequence, JOINTS};
+use crate::data::Sequence;
 use crate::model::{linear_weights, ModelError};
 use crate::predict::{Observations, Predictor};
 
@@ -36,7 +36,7 @@ pub fn score_sequence(
     let times = seq.times();
     let observed = Observations::from_sequence(seq, &steps.observed)?;
     let prediction = predictor.predict(&observed, &times, blend)?;
-    let std = predictor.normalization().std;
+    let std = predictor.normalization().std.clone();
     let n = seq.frame_bytes();
     let mut scores = SequenceScores {
         mean_motion: mean.map(|_| Accumulator::default()),
@@ -62,10 +62,10 @@ pub fn score_sequence(
         let (nearest, baseline_joints) = baseline(seq, &steps.observed, k);
         let model = Guess {
             frame: &prediction.image_mean[k * n..(k + 1) * n],
-            joints: &prediction.joint_mean[k * JOINTS..(k + 1) * JOINTS],
+            joints: prediction.joint_mean_at(k),
             sigma: Some(Sigma {
                 frame: prediction.sigma_frame(k),
-                joints: &prediction.joint_sigma[k * JOINTS..(k + 1) * JOINTS],
+                joints: prediction.joint_sigma_at(k),
                 std: &std,
                 nearest: &observed_frames[nearest],
             }),
@@ -104,20 +104,22 @@ pub fn score_sequence(
 /// The trivial baseline at step `k`: the index (into `observed`) of the nearest observation,
 /// for its frame, and the joints linearly interpolated between the observations around `k`
 /// (held before the first and after the last).
-fn baseline(seq: &Sequence, observed: &[usize], k: usize) -> (usize, [f32; JOINTS]) {
+fn baseline(seq: &Sequence, observed: &[usize], k: usize) -> (usize, Vec<f32>) {
     let nearest = (0..observed.len())
         .min_by_key(|&i| observed[i].abs_diff(k))
         .unwrap_or(0);
     // Step indices are times too: the phase is linear in them.
     let steps: Vec<f32> = observed.iter().map(|&o| o as f32).collect();
     let weights = linear_weights(&steps, &vec![true; steps.len()], k as f32);
-    let joints = std::array::from_fn(|j| {
-        observed
-            .iter()
-            .zip(&weights)
-            .map(|(&o, w)| w * seq.joints[o][j])
-            .sum()
-    });
+    let joints = (0..seq.joints.width())
+        .map(|j| {
+            observed
+                .iter()
+                .zip(&weights)
+                .map(|(&o, w)| w * seq.joints[o][j])
+                .sum()
+        })
+        .collect();
     (nearest, joints)
 }
 
@@ -223,20 +225,21 @@ impl QualityReport {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::data::JOINTS;
 
     #[test]
     fn the_baseline_interpolates_and_holds() {
         let seq = Sequence {
             image_size: 1,
             joints: (0..7).map(|k| [k as f32; JOINTS]).collect(),
-            endpoint: vec![[0.0; 7]; 7],
-            object: vec![[0.0; 3]; 7],
+            endpoint: Some(vec![[0.0; 7]; 7]),
+            object: Some(vec![[0.0; 3]; 7]),
             frames: vec![0; 21],
         };
         let observed = [1, 3];
-        assert_eq!(baseline(&seq, &observed, 0), (0, [1.0; JOINTS]));
-        assert_eq!(baseline(&seq, &observed, 2), (0, [2.0; JOINTS]));
-        assert_eq!(baseline(&seq, &observed, 3), (1, [3.0; JOINTS]));
-        assert_eq!(baseline(&seq, &observed, 6), (1, [3.0; JOINTS]));
+        assert_eq!(baseline(&seq, &observed, 0), (0, vec![1.0; JOINTS]));
+        assert_eq!(baseline(&seq, &observed, 2), (0, vec![2.0; JOINTS]));
+        assert_eq!(baseline(&seq, &observed, 3), (1, vec![3.0; JOINTS]));
+        assert_eq!(baseline(&seq, &observed, 6), (1, vec![3.0; JOINTS]));
     }
 }

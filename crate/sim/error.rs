@@ -8,6 +8,13 @@ use crate::data::DataError;
 pub enum SimError {
     #[error("unknown action {0:?}: expected \"grasp\" or \"move\"")]
     UnknownAction(String),
+    #[error("unknown arm {0:?}: expected {arms}", arms = super::Arm::names_text())]
+    UnknownArm(String),
+    #[error(
+        "rows of {0} joint values a step: the simulator's arms take {widths} (the angles, then the gripper)",
+        widths = super::Arm::widths_text()
+    )]
+    ArmWidth(usize),
     #[error(
         "image size {0} is not supported: expected {sizes}",
         sizes = crate::data::image_sizes_text()

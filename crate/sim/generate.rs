@@ -5,7 +5,7 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::mpsc;
 use std::thread;
 
-use super::{episode, Action, SimError};
+use super::{episode_with_arm, Action, Arm, SimError};
 use crate::data::{DatasetWriter, Sequence};
 
 /// One recorded episode, sent from a worker to the writing thread.
@@ -17,12 +17,27 @@ type Recorded = (u32, Action, u64, Result<Sequence, SimError>);
 /// thread writes. The dataset is built by a [`DatasetWriter`] and renamed to `out` at the end:
 /// a failed or interrupted run leaves no partial `out`. `progress(done, total)` runs on the
 /// calling thread, once with 0 before the first sequence and once after each one written.
-/// Returns where the dataset is.
+/// Returns where the dataset is. The arm is the UR5 ([`generate_with_arm`] picks another).
 pub fn generate(
     out: &Path,
     ids: Range<u32>,
     seed: u64,
     actions: &[Action],
+    image_size: u32,
+    jobs: usize,
+    progress: impl FnMut(usize, usize),
+) -> Result<PathBuf, SimError> {
+    let recording = (Arm::Ur5, actions);
+    generate_with_arm(out, ids, seed, recording, image_size, jobs, progress)
+}
+
+/// [`generate`] with `arm` performing `actions`: its sequences have the arm's
+/// [`width`](Arm::width) of joint values a step.
+pub fn generate_with_arm(
+    out: &Path,
+    ids: Range<u32>,
+    seed: u64,
+    (arm, actions): (Arm, &[Action]),
     image_size: u32,
     jobs: usize,
     mut progress: impl FnMut(usize, usize),
@@ -59,7 +74,12 @@ pub fn generate(
                     };
                     let seed = seed.wrapping_add(u64::from(id));
                     if tx
-                        .send((id, action, seed, episode(action, seed, image_size)))
+                        .send((
+                            id,
+                            action,
+                            seed,
+                            episode_with_arm(arm, action, seed, image_size),
+                        ))
                         .is_err()
                     {
                         break;

@@ -38,15 +38,22 @@ impl Outcome {
     pub const PUSH_CM: f32 = 3.0;
 
     /// Judges `performed` (an episode of `action`) against `demonstration`; the two are
-    /// compared at equal phase, so their lengths may differ. `None` when either is empty.
+    /// compared at equal phase, so their lengths may differ. `None` when either is empty or
+    /// lacks its object or end-effector track.
     pub fn judge(action: Action, performed: &Sequence, demonstration: &Sequence) -> Option<Self> {
-        let (first, last) = (performed.object.first()?, performed.object.last()?);
-        let goal = demonstration.object.last()?;
+        let (performed_object, demonstrated) =
+            (performed.object.as_ref()?, demonstration.object.as_ref()?);
+        let (performed_endpoint, demonstrated_endpoint) = (
+            performed.endpoint.as_ref()?,
+            demonstration.endpoint.as_ref()?,
+        );
+        let (first, last) = (performed_object.first()?, performed_object.last()?);
+        let goal = demonstrated.last()?;
         let lift_cm = (last[2] - first[2]) * 100.0;
         let object_error_cm = distance(last, goal) * 100.0;
         let push_error_cm = match action {
             Action::Grasp => None,
-            Action::Move => PushError::of(demonstration.object.first()?, goal, last),
+            Action::Move => PushError::of(demonstrated.first()?, goal, last),
         };
         let n = performed.len();
         let path: f32 = (0..n)
@@ -56,8 +63,8 @@ impl Outcome {
                 } else {
                     0.0
                 };
-                let ours = &performed.endpoint[k];
-                let theirs = at_phase(&demonstration.endpoint, phase);
+                let ours = &performed_endpoint[k];
+                let theirs = at_phase(demonstrated_endpoint, phase);
                 distance(&[ours[0], ours[1], ours[2]], &theirs)
             })
             .sum();
@@ -115,16 +122,19 @@ fn at_phase<const N: usize>(rows: &[[f32; N]], phase: f32) -> [f32; 3] {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::data::Joints;
 
     fn sequence(object: Vec<[f32; 3]>, x: f32) -> Sequence {
         let n = object.len();
         Sequence {
             image_size: 1,
-            joints: vec![[0.0; 7]; n],
-            endpoint: (0..n)
-                .map(|k| [x + k as f32 * 0.01, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
-                .collect(),
-            object,
+            joints: Joints::from_rows(&vec![[0.0; 7]; n]),
+            endpoint: Some(
+                (0..n)
+                    .map(|k| [x + k as f32 * 0.01, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
+                    .collect(),
+            ),
+            object: Some(object),
             frames: vec![0; n * 3],
         }
     }

@@ -1,6 +1,6 @@
 use rapier3d::prelude::*;
 
-use super::arm::{v, Arm, ARM_JOINTS, FINGER_OPEN, FINGER_TRAVEL};
+use super::chain::{v, Chain, FINGER_OPEN, FINGER_TRAVEL};
 use super::render::{Camera, Primitive, Shape, Table};
 
 /// Object (a yellow cylinder) radius and half height, metres.
@@ -24,10 +24,11 @@ pub const CAMERA: Camera = Camera {
     fov_y: 0.70,
 };
 
-const GRAY: [f32; 3] = [0.80, 0.80, 0.82];
-const DARK: [f32; 3] = [0.42, 0.42, 0.44];
-const BLUE: [f32; 3] = [0.42, 0.70, 0.95];
-const WHITE: [f32; 3] = [0.93, 0.93, 0.93];
+/// The arms' colours: light tubes, dark housings, blue caps, white gripper.
+pub(super) const GRAY: [f32; 3] = [0.80, 0.80, 0.82];
+pub(super) const DARK: [f32; 3] = [0.42, 0.42, 0.44];
+pub(super) const BLUE: [f32; 3] = [0.42, 0.70, 0.95];
+pub(super) const WHITE: [f32; 3] = [0.93, 0.93, 0.93];
 const YELLOW: [f32; 3] = [0.96, 0.86, 0.02];
 
 /// Collision groups: the arm and gripper touch only the object; the object touches everything.
@@ -50,19 +51,20 @@ struct Visual {
 }
 
 /// The physical world: table, object, and the arm as one rapier multibody (fixed base,
-/// 6 revolute links, 2 prismatic fingers) driven by position motors.
-pub struct Scene {
+/// `N` revolute links, 2 prismatic fingers) driven by position motors.
+pub struct Scene<const N: usize = 6> {
+    chain: &'static Chain<N>,
     world: PhysicsWorld,
-    joints: [MultibodyJointHandle; ARM_JOINTS],
+    joints: [MultibodyJointHandle; N],
     fingers: [MultibodyJointHandle; 2],
     tcp_link: RigidBodyHandle,
     object: RigidBodyHandle,
     visuals: Vec<Visual>,
 }
 
-impl Scene {
-    /// Build the scene with the arm at joint angles `q`, gripper open, object at `(x, y)`.
-    pub fn new(q: &[f32; ARM_JOINTS], object: [f32; 2]) -> Scene {
+impl<const N: usize> Scene<N> {
+    /// Build the scene with `chain`'s arm at joint angles `q`, gripper open, object at `(x, y)`.
+    pub fn new(chain: &'static Chain<N>, q: &[f32; N], object: [f32; 2]) -> Scene<N> {
         let mut world = PhysicsWorld::new();
         world.gravity = Vector::new(0.0, 0.0, -9.81);
         world.integration_parameters.dt = DT;
@@ -123,18 +125,17 @@ impl Scene {
         let base = world.bodies.insert(RigidBodyBuilder::fixed());
         visuals.push(Visual {
             body: base,
-            parts: link_parts(0),
+            parts: (chain.link_parts)(0),
         });
         let mut parent = base;
         let mut joints = Vec::new();
         let mut tcp_link = base;
-        for i in 0..ARM_JOINTS {
-            let origin = v(Arm::JOINT_POINTS[i]);
-            let mass = if i < 3 { 2.0 } else { 0.6 };
-            let link = insert_link(&mut world, origin, mass, 0.01);
-            let axis = v(Arm::JOINT_AXES[i]);
+        for i in 0..N {
+            let origin = v(chain.joint_points[i]);
+            let link = insert_link(&mut world, origin, chain.masses[i], 0.01);
+            let axis = v(chain.joint_axes[i]);
             let joint = RevoluteJointBuilder::new(axis)
-                .local_anchor1(Arm::anchor(i))
+                .local_anchor1(chain.anchor(i))
                 .local_anchor2(Vector::ZERO)
                 .motor_position(0.0, ARM_STIFFNESS, ARM_DAMPING)
                 .motor_max_force(1.0e6)
@@ -144,7 +145,7 @@ impl Scene {
                 .insert(parent, link, joint, true)
                 .expect("a fresh multibody accepts every link");
             joints.push(handle);
-            let parts = link_parts(i + 1);
+            let parts = (chain.link_parts)(i + 1);
             for part in &parts {
                 attach_collider(&mut world, link, &part.shape, origin, 0.8);
             }
@@ -157,10 +158,10 @@ impl Scene {
         }
 
         // Fingers: prismatic children of the last link, sliding towards each other.
-        let closing = v(Arm::CLOSING_AXIS);
-        let tool = v(Arm::TOOL_AXIS);
-        let flange = v(Arm::FLANGE);
-        let wrist = v(Arm::JOINT_POINTS[ARM_JOINTS - 1]);
+        let closing = v(chain.closing_axis);
+        let tool = v(chain.tool_axis);
+        let flange = v(chain.flange);
+        let wrist = v(chain.joint_points[N - 1]);
         let mut fingers = Vec::new();
         for side in [1.0f32, -1.0] {
             let centre = flange + tool * 0.085 + closing * (side * FINGER_OPEN);
@@ -177,7 +178,7 @@ impl Scene {
                 .insert(tcp_link, finger, joint, true)
                 .expect("a fresh multibody accepts every finger");
             fingers.push(handle);
-            let half = Vector::new(0.035, 0.014, 0.008);
+            let half = v(chain.finger_half);
             let shape = Shape::Cuboid {
                 center: Vector::ZERO,
                 rotation: rapier3d::math::Rotation::IDENTITY,
@@ -191,8 +192,9 @@ impl Scene {
         }
 
         let mut scene = Scene {
+            chain,
             world,
-            joints: joints.try_into().expect("six arm joints"),
+            joints: joints.try_into().expect("a joint per link"),
             fingers: fingers.try_into().expect("two fingers"),
             tcp_link,
             object: object_body,
@@ -203,7 +205,7 @@ impl Scene {
     }
 
     /// Teleport the arm to joint angles `q` (used once, to start at the home pose).
-    fn set_configuration(&mut self, q: &[f32; ARM_JOINTS]) {
+    fn set_configuration(&mut self, q: &[f32; N]) {
         let (mb, _) = self
             .world
             .multibody_joints
@@ -222,12 +224,12 @@ impl Scene {
         mb.apply_displacements(&disp);
         mb.forward_kinematics(&self.world.bodies, true);
         mb.update_rigid_bodies(&mut self.world.bodies, true);
-        self.set_targets(q, &[0.0; ARM_JOINTS], 0.0);
+        self.set_targets(q, &[0.0; N], 0.0);
     }
 
     /// Motor targets: joint angles and velocities, and the gripper closure in [0, 1].
-    pub fn set_targets(&mut self, q: &[f32; ARM_JOINTS], qdot: &[f32; ARM_JOINTS], closure: f32) {
-        for i in 0..ARM_JOINTS {
+    pub fn set_targets(&mut self, q: &[f32; N], qdot: &[f32; N], closure: f32) {
+        for i in 0..N {
             let (mb, id) = self
                 .world
                 .multibody_joints
@@ -259,8 +261,8 @@ impl Scene {
     }
 
     /// Measured arm joint angles.
-    pub fn joint_angles(&self) -> [f32; ARM_JOINTS] {
-        let mut q = [0.0; ARM_JOINTS];
+    pub fn joint_angles(&self) -> [f32; N] {
+        let mut q = [0.0; N];
         for (qi, h) in q.iter_mut().zip(self.joints) {
             let (mb, id) = self.world.multibody_joints.get(h).expect("arm joint");
             *qi = mb.link(id).expect("arm link").joint.coords()[3];
@@ -279,12 +281,10 @@ impl Scene {
         -travel
     }
 
-    /// Grasp point position and link-6 rotation, from the physics state.
+    /// Grasp point position and last-link rotation, from the physics state.
     pub fn tcp(&self) -> (Vector, rapier3d::math::Rotation) {
         let pose = self.world.bodies[self.tcp_link].position();
-        let offset = v(Arm::FLANGE) - v(Arm::JOINT_POINTS[ARM_JOINTS - 1])
-            + v(Arm::TOOL_AXIS) * super::arm::GRASP_DEPTH;
-        (pose * offset, pose.rotation)
+        (pose * self.chain.grasp_offset(), pose.rotation)
     }
 
     /// Object centre.
@@ -328,7 +328,7 @@ fn insert_link(
     )
 }
 
-fn prim(shape: Shape, color: [f32; 3]) -> Primitive {
+pub(super) fn prim(shape: Shape, color: [f32; 3]) -> Primitive {
     Primitive { shape, color }
 }
 
@@ -371,72 +371,4 @@ fn attach_collider(
     world
         .colliders
         .insert_with_parent(c, body, &mut world.bodies);
-}
-
-/// The solids of link `i` (0 = base) at q = 0, in world coordinates: light tubes, dark
-/// housings and blue joint caps, laid out like a UR5.
-fn link_parts(i: usize) -> Vec<Primitive> {
-    let p = |k: usize| v(Arm::JOINT_POINTS[k]);
-    let x = Vector::X;
-    let z = Vector::Z;
-    let cyl =
-        |a: Vector, b: Vector, radius: f32, color| prim(Shape::Cylinder { a, b, radius }, color);
-    let cap =
-        |a: Vector, b: Vector, radius: f32, color| prim(Shape::Capsule { a, b, radius }, color);
-    match i {
-        0 => vec![
-            cyl(Vector::ZERO, z * 0.055, 0.075, BLUE),
-            cyl(z * 0.055, z * 0.07, 0.062, DARK),
-        ],
-        // Shoulder: vertical housing, cap on the lift axis.
-        1 => vec![
-            cyl(z * 0.07, p(1) + z * 0.02, 0.06, DARK),
-            cyl(p(1) + x * 0.07, p(1) - x * 0.08, 0.062, BLUE),
-        ],
-        // Upper arm, offset along the lift axis like the UR5's.
-        2 => {
-            let off = -x * 0.135;
-            vec![
-                cyl(p(1) - x * 0.08, p(1) + off - x * 0.06, 0.06, DARK),
-                cap(p(1) + off, p(2) + off, 0.045, GRAY),
-                cyl(p(2) + off - x * 0.055, p(2) + off + x * 0.06, 0.058, BLUE),
-            ]
-        }
-        // Forearm.
-        3 => {
-            let off = -x * 0.015;
-            vec![
-                cyl(p(2) - x * 0.075, p(2) + off + x * 0.045, 0.05, DARK),
-                cap(p(2) + off, p(3) + off, 0.037, GRAY),
-                cyl(p(3) + off + x * 0.05, p(3) - x * 0.07, 0.042, BLUE),
-            ]
-        }
-        // Wrist 1: housing around the wrist-2 axis.
-        4 => vec![
-            cyl(p(3) - x * 0.07, p(4) + x * 0.01, 0.04, DARK),
-            cyl(p(4) + z * 0.04, p(4) - z * 0.05, 0.042, BLUE),
-        ],
-        // Wrist 2: housing around the wrist-3 axis.
-        5 => vec![
-            cyl(p(4) - z * 0.05, p(5) - z * 0.0, 0.038, DARK),
-            cyl(p(5) + x * 0.04, p(5) - x * 0.06, 0.04, BLUE),
-        ],
-        // Wrist 3: flange and gripper palm.
-        _ => {
-            let tool = v(Arm::TOOL_AXIS);
-            let flange = v(Arm::FLANGE);
-            let half = Vector::new(0.02, 0.025, FINGER_OPEN + 0.012);
-            vec![
-                cyl(p(5) - x * 0.06, flange, 0.033, DARK),
-                prim(
-                    Shape::Cuboid {
-                        center: flange + tool * 0.03,
-                        rotation: rapier3d::math::Rotation::IDENTITY,
-                        half,
-                    },
-                    WHITE,
-                ),
-            ]
-        }
-    }
 }

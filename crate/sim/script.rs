@@ -4,10 +4,11 @@ use rand::RngExt;
 use rand_pcg::Pcg64;
 use rapier3d::math::Vector;
 
-use super::arm::FINGER_OPEN;
+use super::chain::{Chain, FINGER_OPEN};
 use super::ik::{GripperPose, Ik};
-use super::plan::{HOME, HOME_GUESS};
+use super::plan::HOME;
 use super::scene::OBJECT_RADIUS;
+use super::ur5::UR5;
 #[cfg(doc)]
 use super::Simulator;
 use super::{Action, Plan};
@@ -177,12 +178,17 @@ impl Script {
         (from, closure)
     }
 
-    /// The plan of the script timed with `durations` (one per segment): the grasp point
+    /// The UR5's plan of the script timed with `durations` (see [`Script::plan_on`]).
+    pub fn plan(&self, durations: &[usize]) -> Plan {
+        self.plan_on(&UR5, durations)
+    }
+
+    /// `chain`'s plan of the script timed with `durations` (one per segment): the grasp point
     /// interpolated in Cartesian space and IK solved at every step, warm-started from the
     /// step before so that the joints stay on one branch.
-    pub fn plan(&self, durations: &[usize]) -> Plan {
+    pub fn plan_on<const N: usize>(&self, chain: &Chain<N>, durations: &[usize]) -> Plan<N> {
         let ik = Ik::default();
-        let (mut q, _) = ik.solve(&self.home, HOME_GUESS);
+        let (mut q, _) = ik.solve(chain, &self.home, chain.home_guess);
         let mut plan = Plan {
             joints: vec![q],
             closure: vec![0.0],
@@ -190,7 +196,7 @@ impl Script {
         let steps: usize = durations.iter().take(self.segments.len()).sum();
         for k in 1..=steps {
             let (pose, closure) = self.at(durations, k as f32);
-            q = ik.solve(&pose, q).0;
+            q = ik.solve(chain, &pose, q).0;
             plan.joints.push(q);
             plan.closure.push(closure);
         }

@@ -2,25 +2,44 @@ use rand::{RngExt, SeedableRng};
 use rand_pcg::Pcg64;
 use rapier3d::math::Vector;
 
-use crate::data::{Sequence, IMAGE_SIZES};
+use crate::data::{Joints, Sequence, IMAGE_SIZES};
 
-use super::arm::ARM_JOINTS;
+use super::panda::PANDA;
 use super::plan::Plan;
 use super::render::{Primitive, Renderer};
-use super::scene::{Scene, CAMERA, DT, SUBSTEPS, TABLE};
+use super::rig::Rig;
+#[cfg(doc)]
+use super::scene::SUBSTEPS;
+use super::scene::{CAMERA, TABLE};
 use super::script::Script;
-use super::{Action, SimError, Trajectory};
+use super::ur5::UR5;
+use super::{Action, Arm, SimError, Trajectory};
 
-/// A running episode: physics scene, scripted plan and renderer.
+/// A running episode: physics scene, scripted plan and renderer, for one of the [`Arm`]s.
 ///
 /// Step 0 is the home pose; each [`step`](Simulator::step) advances the physics by
 /// [`SUBSTEPS`] substeps while the motors track the plan, then the state can be read.
 pub struct Simulator {
-    plan: Plan,
-    scene: Scene,
+    rig: AnyRig,
     renderer: Renderer,
     step: usize,
     primitives: Vec<Primitive>,
+}
+
+/// The arm of an episode, each with its own joint count.
+enum AnyRig {
+    Ur5(Rig<6>),
+    Panda(Rig<7>),
+}
+
+/// `$body` with `$rig` bound to whichever arm's [`Rig`] `$any` holds.
+macro_rules! on_rig {
+    ($any:expr, $rig:ident => $body:expr) => {
+        match $any {
+            AnyRig::Ur5($rig) => $body,
+            AnyRig::Panda($rig) => $body,
+        }
+    };
 }
 
 /// Seeds for the placement and the plan are drawn from separate streams, so an episode made
@@ -31,10 +50,23 @@ impl Simulator {
     /// Region (metres, arm-base frame: x right, y away from the camera) where objects are placed.
     pub const REGION: ([f32; 2], [f32; 2]) = ([-0.15, 0.15], [0.45, 0.65]);
 
-    /// An episode of `action` with the object placed from `seed`; frames `image_size` (64 or 128).
+    /// A UR5 episode of `action` with the object placed from `seed`; frames `image_size`
+    /// (64 or 128).
     pub fn new(action: Action, seed: u64, image_size: u32) -> Result<Self, SimError> {
+        Self::new_with_arm(Arm::Ur5, action, seed, image_size)
+    }
+
+    /// `arm`'s episode of `action` with the object placed from `seed` (where either arm
+    /// finds it, and with the same script: the arms differ only in the joints that realise
+    /// the gripper's poses).
+    pub fn new_with_arm(
+        arm: Arm,
+        action: Action,
+        seed: u64,
+        image_size: u32,
+    ) -> Result<Self, SimError> {
         let [x, y] = Self::placement(seed);
-        Self::with_object(action, x, y, seed, image_size)
+        Self::with_object_on(arm, action, x, y, seed, image_size)
     }
 
     /// Where `new(_, seed, _)` places the object (x, y on the table).
@@ -46,8 +78,8 @@ impl Simulator {
         [x, y]
     }
 
-    /// An episode with the object at `(x, y)` on the table; `seed` still varies the timing
-    /// and the free parameters of the script.
+    /// A UR5 episode with the object at `(x, y)` on the table; `seed` still varies the
+    /// timing and the free parameters of the script.
     pub fn with_object(
         action: Action,
         x: f32,
@@ -55,8 +87,25 @@ impl Simulator {
         seed: u64,
         image_size: u32,
     ) -> Result<Self, SimError> {
+        Self::with_object_on(Arm::Ur5, action, x, y, seed, image_size)
+    }
+
+    /// `arm`'s episode with the object at `(x, y)` (see [`Simulator::with_object`]).
+    pub fn with_object_on(
+        arm: Arm,
+        action: Action,
+        x: f32,
+        y: f32,
+        seed: u64,
+        image_size: u32,
+    ) -> Result<Self, SimError> {
         let (script, durations) = Self::script(action, [x, y], seed);
-        Self::with_plan(script.plan(&durations), x, y, image_size)
+        match arm {
+            Arm::Ur5 => Self::with_plan(script.plan(&durations), x, y, image_size),
+            Arm::Panda => {
+                Self::with_panda_plan(script.plan_on(&PANDA, &durations), x, y, image_size)
+            }
+        }
     }
 
     /// The script and the segments' durations that `with_object(action, object, seed)`
@@ -68,7 +117,7 @@ impl Simulator {
         (script, durations)
     }
 
-    /// The arm performing `trajectory` (see [`Plan::from_trajectory`]) with the object at
+    /// The trajectory's arm performing it (see [`Plan::from_trajectory`]) with the object at
     /// `(x, y)`: the same motors, physics and recording as a scripted episode, one recorded
     /// step per row. The arm starts at the first row's angles.
     pub fn performing(
@@ -77,11 +126,48 @@ impl Simulator {
         y: f32,
         image_size: u32,
     ) -> Result<Self, SimError> {
-        Self::with_plan(Plan::from_trajectory(trajectory), x, y, image_size)
+        match trajectory.arm() {
+            Arm::Ur5 => Self::with_plan(Plan::from_trajectory(trajectory), x, y, image_size),
+            Arm::Panda => {
+                Self::with_panda_plan(Plan::from_trajectory(trajectory), x, y, image_size)
+            }
+        }
     }
 
-    /// An episode whose motors track `plan`'s targets, with the object at `(x, y)`.
+    /// A UR5 episode whose motors track `plan`'s targets, with the object at `(x, y)`.
     pub fn with_plan(plan: Plan, x: f32, y: f32, image_size: u32) -> Result<Self, SimError> {
+        Self::check(x, y, image_size)?;
+        Ok(Self::with_rig(
+            AnyRig::Ur5(Rig::new(&UR5, plan, [x, y])),
+            image_size,
+        ))
+    }
+
+    /// A Panda episode whose motors track `plan`'s targets, with the object at `(x, y)`.
+    pub fn with_panda_plan(
+        plan: Plan<7>,
+        x: f32,
+        y: f32,
+        image_size: u32,
+    ) -> Result<Self, SimError> {
+        Self::check(x, y, image_size)?;
+        Ok(Self::with_rig(
+            AnyRig::Panda(Rig::new(&PANDA, plan, [x, y])),
+            image_size,
+        ))
+    }
+
+    fn with_rig(rig: AnyRig, image_size: u32) -> Self {
+        Simulator {
+            rig,
+            renderer: Renderer::new(image_size, CAMERA, TABLE),
+            step: 0,
+            primitives: Vec::new(),
+        }
+    }
+
+    /// Fails unless frames of `image_size` are made and `(x, y)` lies in the region.
+    fn check(x: f32, y: f32, image_size: u32) -> Result<(), SimError> {
         if !IMAGE_SIZES.contains(&(image_size as usize)) {
             return Err(SimError::ImageSize(image_size));
         }
@@ -96,24 +182,25 @@ impl Simulator {
                 y1: ry[1],
             });
         }
-        let scene = Scene::new(&plan.joints[0], [x, y]);
-        Ok(Simulator {
-            plan,
-            scene,
-            renderer: Renderer::new(image_size, CAMERA, TABLE),
-            step: 0,
-            primitives: Vec::new(),
-        })
+        Ok(())
+    }
+
+    /// The arm performing.
+    pub fn arm(&self) -> Arm {
+        match self.rig {
+            AnyRig::Ur5(_) => Arm::Ur5,
+            AnyRig::Panda(_) => Arm::Panda,
+        }
     }
 
     /// Number of recorded steps the episode has.
     pub fn len(&self) -> usize {
-        self.plan.len()
+        on_rig!(&self.rig, rig => rig.len())
     }
 
     /// Always false: an episode has at least its home step.
     pub fn is_empty(&self) -> bool {
-        self.plan.len() == 0
+        self.len() == 0
     }
 
     /// Index of the current step (0 after construction).
@@ -123,48 +210,32 @@ impl Simulator {
 
     /// Advance one recorded step; false (and no change) when the episode is over.
     pub fn step(&mut self) -> bool {
-        if self.step + 1 >= self.plan.len() {
+        if self.step + 1 >= self.len() {
             return false;
         }
-        let (from, to) = (self.plan.joints[self.step], self.plan.joints[self.step + 1]);
-        let (c0, c1) = (
-            self.plan.closure[self.step],
-            self.plan.closure[self.step + 1],
-        );
-        let span = SUBSTEPS as f32 * DT;
-        let mut qdot = [0.0; ARM_JOINTS];
-        for i in 0..ARM_JOINTS {
-            qdot[i] = (to[i] - from[i]) / span;
-        }
-        for s in 1..=SUBSTEPS {
-            let u = s as f32 / SUBSTEPS as f32;
-            let mut q = [0.0; ARM_JOINTS];
-            for i in 0..ARM_JOINTS {
-                q[i] = from[i] + (to[i] - from[i]) * u;
-            }
-            self.scene.set_targets(&q, &qdot, c0 + (c1 - c0) * u);
-            self.scene.step();
-        }
+        on_rig!(&mut self.rig, rig => rig.advance(self.step));
         self.step += 1;
         true
     }
 
-    /// Joint values at the current step: 6 measured angles (radians), then the gripper value.
-    pub fn joints(&self) -> [f32; 7] {
-        let q = self.scene.joint_angles();
-        [q[0], q[1], q[2], q[3], q[4], q[5], self.scene.gripper()]
+    /// Joint values at the current step: the arm's measured angles (radians; 6 for the
+    /// UR5, 7 for the Panda), then the gripper value.
+    pub fn joints(&self) -> Vec<f32> {
+        on_rig!(&self.rig, rig => rig.joints())
     }
 
-    /// End effector at the current step: grasp point xyz, orientation (XYZ Euler angles), gripper.
+    /// End effector at the current step: grasp point xyz, orientation (XYZ Euler angles of
+    /// the last link), gripper.
     pub fn endpoint(&self) -> [f32; 7] {
-        let (p, rot) = self.scene.tcp();
+        let ((p, rot), gripper) =
+            on_rig!(&self.rig, rig => (rig.scene().tcp(), rig.scene().gripper()));
         let (a, b, c) = rot.to_euler(rapier3d::glamx::EulerRot::XYZ);
-        [p.x, p.y, p.z, a, b, c, self.scene.gripper()]
+        [p.x, p.y, p.z, a, b, c, gripper]
     }
 
     /// Object centre at the current step.
     pub fn object(&self) -> [f32; 3] {
-        let p: Vector = self.scene.object_position();
+        let p: Vector = on_rig!(&self.rig, rig => rig.scene().object_position());
         [p.x, p.y, p.z]
     }
 
@@ -175,7 +246,7 @@ impl Simulator {
 
     /// Render the current step into `out` (`image_size² × 3` RGB bytes).
     pub fn render_into(&mut self, out: &mut [u8]) {
-        self.scene.primitives(&mut self.primitives);
+        on_rig!(&self.rig, rig => rig.primitives(&mut self.primitives));
         self.renderer.render(&self.primitives, out);
     }
 
@@ -191,36 +262,48 @@ impl Simulator {
     pub fn run(mut self) -> Sequence {
         let n = self.image_size() as usize;
         let steps = self.len() - self.step;
-        let mut seq = Sequence {
-            image_size: self.image_size(),
-            joints: Vec::with_capacity(steps),
-            endpoint: Vec::with_capacity(steps),
-            object: Vec::with_capacity(steps),
-            frames: vec![0; steps * n * n * 3],
-        };
+        let mut joints = Joints::with_width(self.arm().width());
+        let mut endpoint = Vec::with_capacity(steps);
+        let mut object = Vec::with_capacity(steps);
+        let mut frames = vec![0; steps * n * n * 3];
         let mut k = 0;
         loop {
-            seq.joints.push(self.joints());
-            seq.endpoint.push(self.endpoint());
-            seq.object.push(self.object());
-            let frame = &mut seq.frames[k * n * n * 3..(k + 1) * n * n * 3];
-            self.scene.primitives(&mut self.primitives);
-            self.renderer.render(&self.primitives, frame);
+            joints.push(&self.joints());
+            endpoint.push(self.endpoint());
+            object.push(self.object());
+            let frame = &mut frames[k * n * n * 3..(k + 1) * n * n * 3];
+            self.render_into(frame);
             k += 1;
             if !self.step() {
                 break;
             }
         }
-        seq
+        Sequence {
+            image_size: self.image_size(),
+            joints,
+            endpoint: Some(endpoint),
+            object: Some(object),
+            frames,
+        }
     }
 }
 
-/// Generate one whole episode.
+/// Generate one whole UR5 episode.
 pub fn episode(action: Action, seed: u64, image_size: u32) -> Result<Sequence, SimError> {
-    Ok(Simulator::new(action, seed, image_size)?.run())
+    episode_with_arm(Arm::Ur5, action, seed, image_size)
 }
 
-/// Record the arm performing `trajectory` with the object at `object` (x, y): see
+/// Generate one whole episode of `arm`.
+pub fn episode_with_arm(
+    arm: Arm,
+    action: Action,
+    seed: u64,
+    image_size: u32,
+) -> Result<Sequence, SimError> {
+    Ok(Simulator::new_with_arm(arm, action, seed, image_size)?.run())
+}
+
+/// Record the trajectory's arm performing it with the object at `object` (x, y): see
 /// [`Simulator::performing`].
 pub fn perform(
     trajectory: &Trajectory,

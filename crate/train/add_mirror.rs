@@ -5,7 +5,7 @@ use rand::SeedableRng;
 use rand_pcg::Pcg64;
 
 use super::{fit_mirror, MirrorExamples, MirrorFit, MirrorProgress, TrainError};
-use crate::data::{read_sequence, write_atomic, SequenceRef};
+use crate::data::{read_sequence_from, write_atomic, Disk, SequenceRef};
 use crate::model::{self, with_joint_sigma_scale};
 use crate::predict::Predictor;
 
@@ -27,6 +27,7 @@ pub fn add_mirror(
     path: &Path,
     train: &[SequenceRef],
     held_out: &[SequenceRef],
+    camera: Option<&str>,
     fit: MirrorFit,
     device: &Device,
     mut on_progress: impl FnMut(MirrorStage),
@@ -37,13 +38,15 @@ pub fn add_mirror(
     let size = predictor.model().image_size() as u32;
     let mut rng = Pcg64::seed_from_u64(fit.seed);
     let total = train.len() + held_out.len();
-    let mut sets = [MirrorExamples::default(), MirrorExamples::default()];
+    let d = predictor.joint_count();
+    let mut sets = [MirrorExamples::new(d), MirrorExamples::new(d)];
     for (done, (set, r)) in [0, 1]
         .into_iter()
         .flat_map(|s| [train, held_out][s].iter().map(move |r| (s, r)))
         .enumerate()
     {
-        let seq = read_sequence(&r.dir, r.id, Some(size))?;
+        let seq = read_sequence_from(&Disk, &r.dir, r.id, camera, Some(size))?;
+        crate::data::Dataset::check_width(r, seq.joints.width(), d, &path.display().to_string())?;
         sets[set].add(&predictor, &seq, fit.draws, &mut rng)?;
         on_progress(MirrorStage::Reading {
             done: done + 1,

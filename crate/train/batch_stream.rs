@@ -96,6 +96,7 @@ mod tests {
     use rand::SeedableRng;
 
     use super::*;
+    use crate::data::JOINTS;
     use crate::train::sequence_store::tests::{dataset, in_memory, sampler, STORED};
 
     #[test]
@@ -104,10 +105,13 @@ mod tests {
         let refs = dataset(tmp.path());
         let pool = in_memory(&refs);
         // A cache of a few frames: most are decoded again, some come from it.
-        let store = SequenceStore::open(refs, STORED / 2, 3000).unwrap();
-        let norm = Normalization::fit(store.joints());
+        let store =
+            SequenceStore::open(refs, STORED / 2, 3000, None, (JOINTS, "the first sequence"))
+                .unwrap();
+        let norm = Normalization::fit(JOINTS, store.joints());
         let mut reference = Pcg64::seed_from_u64(5);
-        let mut stream = BatchStream::spawn(store, sampler(), norm, reference.clone()).unwrap();
+        let mut stream =
+            BatchStream::spawn(store, sampler(), norm.clone(), reference.clone()).unwrap();
         for i in 0..30 {
             let drawn = stream.next().unwrap();
             let (batch, joint_targets) = sampler().sample_with_joints(&pool, &norm, &mut reference);
@@ -123,8 +127,9 @@ mod tests {
     fn fails_naming(spoil: impl Fn(&Path), says: &str) {
         let tmp = tempfile::tempdir().unwrap();
         let refs = dataset(tmp.path());
-        let store = SequenceStore::open(refs, STORED / 2, 0).unwrap();
-        let norm = Normalization::fit(store.joints());
+        let store =
+            SequenceStore::open(refs, STORED / 2, 0, None, (JOINTS, "the first sequence")).unwrap();
+        let norm = Normalization::fit(JOINTS, store.joints());
         let mut stream =
             BatchStream::spawn(store, sampler(), norm, Pcg64::seed_from_u64(9)).unwrap();
         for _ in 0..2 {

@@ -128,6 +128,10 @@ pub struct TrainConfig {
     /// joint, or one scale for all six so that the loss counts their radians alike.
     #[serde(default)]
     pub joint_scale: JointScale,
+    /// The camera whose frames the model sees: a sub-folder of that name in every sequence
+    /// folder (see [`crate::data`]); none: the default camera (`<k>.png`).
+    #[serde(default)]
+    pub camera: Option<String>,
 }
 
 /// [`TrainConfig::frame_cache_mib`]'s default: 21,000 frames at 64 px (all of 350 sequences of
@@ -167,6 +171,7 @@ impl TrainConfig {
             half: false,
             frame_cache_mib: default_frame_cache_mib(),
             joint_scale: JointScale::PerJoint,
+            camera: None,
         }
     }
 

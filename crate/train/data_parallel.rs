@@ -88,7 +88,8 @@ fn shard(
         }
     }
     if joint_targets.targets > 0 {
-        let (times, joints) = joint_target_tensors(joint_targets, device)?;
+        let d = model.joint_count();
+        let (times, joints) = joint_target_tensors(joint_targets, d, device)?;
         let (mean, sigma) = model.decode_joints(&representation, times)?;
         let nll = joint_nll(mean, sigma, joints, config.beta_nll);
         loss.total = loss.total + nll.mul_scalar(config.model.joint_weight);
@@ -108,6 +109,7 @@ mod tests {
     use burn::tensor::Tensor;
 
     use super::*;
+    use crate::data::JOINTS;
     use crate::model::{ModelConfig, ModelKind};
 
     /// Four sequences of made-up values, 1 to 3 real contexts each, two targets and two
@@ -118,7 +120,7 @@ mod tests {
             x = (x * 9.7 + 0.13).fract();
             x
         };
-        let mut batch = Batch::with_targets(4, 3, 2, s);
+        let mut batch = Batch::with_targets(4, 3, 2, s, JOINTS);
         for values in [
             &mut batch.context_images,
             &mut batch.context_joints,

@@ -1,25 +1,40 @@
 use rand::{Rng, RngExt};
 
-use crate::data::{Sequence, JOINTS};
-use crate::model::{mirror_inputs, ModelError, MIRROR_INPUTS, MIRROR_SLOTS};
+use crate::data::Sequence;
+use crate::model::{mirror_input_len, mirror_inputs, ModelError, MIRROR_SLOTS};
 use crate::predict::{Observations, Predictor};
 
 /// What the mirror stage learns from: per target step of a demonstration seen at some
 /// glimpses, its inputs ([`mirror_inputs`]), the interpolated reads and the true joints.
 #[derive(Debug, Clone, Default)]
 pub struct MirrorExamples {
-    /// `rows × MIRROR_INPUTS`.
+    /// D: joint values a step.
+    pub joints: usize,
+    /// `rows × mirror_input_len(D)`.
     pub x: Vec<f32>,
-    /// `rows × 7`: the reads interpolated at the target.
+    /// `rows × D`: the reads interpolated at the target.
     pub start: Vec<f32>,
-    /// `rows × 7`: the demonstration's joints there.
+    /// `rows × D`: the demonstration's joints there.
     pub truth: Vec<f32>,
 }
 
 impl MirrorExamples {
+    /// No examples yet, of `joints` values a step.
+    pub fn new(joints: usize) -> Self {
+        MirrorExamples {
+            joints,
+            ..Default::default()
+        }
+    }
+
     /// Number of examples (target steps).
     pub fn rows(&self) -> usize {
-        self.truth.len() / JOINTS
+        self.truth.len() / self.joints.max(1)
+    }
+
+    /// Features per example.
+    pub fn features(&self) -> usize {
+        mirror_input_len(self.joints)
     }
 
     /// Adds `draws` layouts of `seq`: the glimpses, the joints `predictor`'s network reads
@@ -43,10 +58,12 @@ impl MirrorExamples {
             let times: Vec<f32> = steps.iter().map(|&s| phases[s]).collect();
             let span = steps[0]..=steps[steps.len() - 1];
             let (x, start) = mirror_inputs(&times, &reads, &phases[span.clone()]);
-            debug_assert_eq!(x.len(), span.clone().count() * MIRROR_INPUTS);
+            debug_assert_eq!(x.len(), span.clone().count() * self.features());
             self.x.extend(x);
             self.start.extend(start);
-            self.truth.extend(seq.joints[span].iter().flatten());
+            for k in span {
+                self.truth.extend_from_slice(&seq.joints[k]);
+            }
         }
         Ok(())
     }

@@ -5,8 +5,7 @@ use rand::{RngExt, SeedableRng};
 use rand_pcg::Pcg64;
 
 use super::{MirrorExamples, Schedule, TrainError};
-use crate::data::JOINTS;
-use crate::model::{Mirror, MirrorConfig, MIRROR_INPUTS};
+use crate::model::{Mirror, MirrorConfig};
 
 /// How `train --mirror` fits the [`Mirror`] stage.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -88,9 +87,12 @@ pub fn fit_mirror(
         }
     }
     device.seed(fit.seed);
-    let mut mirror = MirrorConfig::new().with_width(fit.width).init(device);
+    let mut mirror = MirrorConfig::new()
+        .with_width(fit.width)
+        .with_joints(train.joints)
+        .init(device);
     mirror.scale = Param::from_tensor(Tensor::from_data(
-        TensorData::new(input_scale(train), [MIRROR_INPUTS]),
+        TensorData::new(input_scale(train), [train.features()]),
         device,
     ))
     .set_require_grad(false);
@@ -131,8 +133,8 @@ pub fn fit_mirror(
 /// The largest magnitude of every input over `examples` (at least 1e-3): what the stage
 /// divides its inputs by.
 fn input_scale(examples: &MirrorExamples) -> Vec<f32> {
-    let mut scale = vec![1e-3f32; MIRROR_INPUTS];
-    for row in examples.x.chunks_exact(MIRROR_INPUTS) {
+    let mut scale = vec![1e-3f32; examples.features()];
+    for row in examples.x.chunks_exact(examples.features()) {
         for (s, v) in scale.iter_mut().zip(row) {
             *s = s.max(v.abs());
         }
@@ -147,25 +149,21 @@ fn batch(
     rng: &mut Pcg64,
     device: &Device,
 ) -> (Tensor<2>, Tensor<2>, Tensor<2>) {
-    let rows = examples.rows();
+    let (rows, f, d) = (examples.rows(), examples.features(), examples.joints);
     let (mut x, mut start, mut truth) = (
-        Vec::with_capacity(size * MIRROR_INPUTS),
-        Vec::with_capacity(size * JOINTS),
-        Vec::with_capacity(size * JOINTS),
+        Vec::with_capacity(size * f),
+        Vec::with_capacity(size * d),
+        Vec::with_capacity(size * d),
     );
     for _ in 0..size {
         let i = rng.random_range(0..rows);
-        x.extend_from_slice(&examples.x[i * MIRROR_INPUTS..(i + 1) * MIRROR_INPUTS]);
-        start.extend_from_slice(&examples.start[i * JOINTS..(i + 1) * JOINTS]);
-        truth.extend_from_slice(&examples.truth[i * JOINTS..(i + 1) * JOINTS]);
+        x.extend_from_slice(&examples.x[i * f..(i + 1) * f]);
+        start.extend_from_slice(&examples.start[i * d..(i + 1) * d]);
+        truth.extend_from_slice(&examples.truth[i * d..(i + 1) * d]);
     }
     let tensor =
         |v: Vec<f32>, width: usize| Tensor::from_data(TensorData::new(v, [size, width]), device);
-    (
-        tensor(x, MIRROR_INPUTS),
-        tensor(start, JOINTS),
-        tensor(truth, JOINTS),
-    )
+    (tensor(x, f), tensor(start, d), tensor(truth, d))
 }
 
 fn scalar(t: Tensor<1>) -> f64 {

@@ -3,8 +3,8 @@ use std::sync::Arc;
 
 use crate::augment::{Batch, JointTargets, Selection};
 use crate::data::{
-    read_frames, read_joints, read_sequence, DataError, Disk, Normalization, Sequence, SequenceRef,
-    JOINTS,
+    camera_dir, read_frames, read_joints, read_sequence_from, DataError, Dataset, Disk, Joints,
+    Normalization, Sequence, SequenceRef,
 };
 
 use super::FrameCache;
@@ -15,27 +15,34 @@ use super::FrameCache;
 /// of sequences beyond their joints.
 pub(crate) struct SequenceStore {
     sequences: Vec<SequenceRef>,
-    joints: Vec<Vec<[f32; JOINTS]>>,
+    joints: Vec<Joints>,
     image_size: u32,
+    camera: Option<String>,
     cache: FrameCache,
 }
 
 impl SequenceStore {
-    /// The joints of `sequences` read, their frames (at `image_size` pixels) left on disk, up to
-    /// `cache_bytes` of them to be kept once decoded.
+    /// The joints of `sequences` read (every one `width` values a step, as `reference`, the
+    /// file they must agree with, says), their frames (`camera`'s, at `image_size` pixels)
+    /// left on disk, up to `cache_bytes` of them to be kept once decoded.
     pub fn open(
         sequences: Vec<SequenceRef>,
         image_size: u32,
         cache_bytes: usize,
+        camera: Option<&str>,
+        (width, reference): (usize, &str),
     ) -> Result<SequenceStore, DataError> {
-        let joints = sequences
-            .iter()
-            .map(|s| read_joints(&Disk, &s.dir, s.id))
-            .collect::<Result<_, _>>()?;
+        let mut joints = Vec::with_capacity(sequences.len());
+        for s in &sequences {
+            let rows = read_joints(&Disk, &s.dir, s.id)?;
+            Dataset::check_width(s, rows.width(), width, reference)?;
+            joints.push(rows);
+        }
         Ok(SequenceStore {
             sequences,
             joints,
             image_size,
+            camera: camera.map(str::to_string),
             cache: FrameCache::new(cache_bytes),
         })
     }
@@ -52,18 +59,19 @@ impl SequenceStore {
 
     /// Steps of each sequence: what the sampler draws from.
     pub fn lengths(&self) -> Vec<usize> {
-        self.joints.iter().map(Vec::len).collect()
+        self.joints.iter().map(Joints::len).collect()
     }
 
     /// Every step's joints, sequence after sequence.
-    pub fn joints(&self) -> impl Iterator<Item = &[f32; JOINTS]> {
-        self.joints.iter().flatten()
+    pub fn joints(&self) -> impl Iterator<Item = &[f32]> {
+        self.joints.iter().flat_map(Joints::rows)
     }
 
     /// Sequence `i` read whole (frames and all).
     pub fn read(&self, i: usize) -> Result<Sequence, DataError> {
         let s = &self.sequences[i];
-        read_sequence(&s.dir, s.id, Some(self.image_size))
+        let camera = self.camera.as_deref();
+        read_sequence_from(&Disk, &s.dir, s.id, camera, Some(self.image_size))
     }
 
     /// The batch `selection` (drawn from [`SequenceStore::lengths`]) describes, its frames
@@ -94,7 +102,8 @@ impl SequenceStore {
             }
             let s = &self.sequences[i];
             let rows = self.joints[i].len();
-            let decoded = read_frames(&Disk, &s.dir, rows, &missing, self.image_size)?;
+            let dir = camera_dir(&s.dir, self.camera.as_deref());
+            let decoded = read_frames(&Disk, &dir, rows, &missing, self.image_size)?;
             for (k, frame) in missing.into_iter().zip(decoded) {
                 let frame: Arc<[u8]> = frame.into();
                 self.cache.insert(i, k, frame.clone());
@@ -125,7 +134,7 @@ pub(crate) mod tests {
 
     use super::*;
     use crate::augment::{Sampler, SamplerConfig, TimeWarpConfig};
-    use crate::data::{write_sequence, Dataset};
+    use crate::data::{read_sequence, write_sequence, Dataset, JOINTS};
 
     /// Frame size of [`dataset`]'s files; sequences are read at half of it (the reader's
     /// area average).
@@ -146,10 +155,12 @@ pub(crate) mod tests {
             let seq = Sequence {
                 image_size: STORED,
                 joints: (0..t)
-                    .map(|_| std::array::from_fn(|_| (next() % 1000) as f32 / 100.0))
+                    .map(|_| {
+                        std::array::from_fn::<f32, JOINTS, _>(|_| (next() % 1000) as f32 / 100.0)
+                    })
                     .collect(),
-                endpoint: vec![[0.0; 7]; t],
-                object: vec![[0.0; 3]; t],
+                endpoint: Some(vec![[0.0; 7]; t]),
+                object: Some(vec![[0.0; 3]; t]),
                 frames: (0..t * px).map(|_| next() as u8).collect(),
             };
             write_sequence(root, id as u32, "grasp", &seq).unwrap();
@@ -190,8 +201,15 @@ pub(crate) mod tests {
         let pool = in_memory(&refs);
         let frame = (STORED / 2 * STORED / 2 * 3) as usize;
         let bound = 7 * frame;
-        let mut store = SequenceStore::open(refs, STORED / 2, bound).unwrap();
-        let norm = Normalization::fit(store.joints());
+        let mut store = SequenceStore::open(
+            refs,
+            STORED / 2,
+            bound,
+            None,
+            (JOINTS, "the first sequence"),
+        )
+        .unwrap();
+        let norm = Normalization::fit(JOINTS, store.joints());
         let (sampler, mut rng) = (sampler(), Pcg64::seed_from_u64(7));
         let mut reference = rng.clone();
         let mut most = 0;

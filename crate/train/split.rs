@@ -1,6 +1,6 @@
 use std::path::Path;
 
-use crate::data::{Dataset, SequenceRef};
+use crate::data::{Dataset, Disk, SequenceRef};
 
 use super::TrainError;
 
@@ -15,18 +15,32 @@ pub struct Split {
     pub val: Vec<SequenceRef>,
     /// Held-out ids.
     pub val_ids: Vec<u32>,
+    /// The dataset's joint values a step (its first sequence's) and their names, where its
+    /// `dataset.json` gives them.
+    pub joints: (usize, Option<Vec<String>>),
 }
 
 impl Split {
     /// List the sequences of the dataset at `root` and split them.
     pub fn open(root: &Path, val_fraction: f64) -> Result<Split, TrainError> {
+        Self::open_camera(root, val_fraction, None)
+    }
+
+    /// [`Split::open`], checking that the sequences have `camera`'s frames (a sub-folder of
+    /// each sequence's; `None`: the default camera).
+    pub fn open_camera(
+        root: &Path,
+        val_fraction: f64,
+        camera: Option<&str>,
+    ) -> Result<Split, TrainError> {
         if !(0.0..1.0).contains(&val_fraction) {
             return Err(TrainError::config(
                 "val_fraction",
                 format!("{val_fraction}: expected a value in [0, 1)"),
             ));
         }
-        let dataset = Dataset::open(root)?;
+        let dataset = Dataset::open(root)?.with_camera(&Disk, camera)?;
+        let joints = dataset.joint_width(&Disk)?;
         let ids = dataset.ids();
         let held = if ids.len() < 2 || val_fraction == 0.0 {
             0
@@ -49,6 +63,7 @@ impl Split {
             train,
             val,
             val_ids,
+            joints,
         })
     }
 

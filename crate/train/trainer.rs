@@ -86,12 +86,15 @@ impl Trainer {
             ));
         }
         std::fs::create_dir_all(out).map_err(TrainError::io(out))?;
-        let split = Split::open(data, config.val_fraction)?;
-        let train = SequenceStore::open(
-            split.train.clone(),
-            config.model.image_size as u32,
-            config.frame_cache_mib << 20,
-        )?;
+        let split = Split::open_camera(data, config.val_fraction, config.camera.as_deref())?;
+        // The joint count comes from the data, and so do the names where it has them.
+        let mut config = config;
+        let (width, names) = split.joints.clone();
+        if config.init.is_none() {
+            config.model.joints = Some(width);
+            config.model.joint_names = names;
+        }
+        let train = open_store(&split.train, &config, &split)?;
         device.seed(config.seed);
         let model = match &config.init {
             Some(path) => {
@@ -107,6 +110,19 @@ impl Trainer {
                 // A mirror stage learnt the file's network's reads: training leaves it behind
                 // (`--mirror` fits one to the result).
                 .without_mirror();
+                if model.joint_count() != width {
+                    return Err(TrainError::config(
+                        "init",
+                        format!(
+                            "{}: the model has {} joint values a step, the data at {} has {width}: start from a model of this robot",
+                            path.display(),
+                            model.joint_count(),
+                            data.display()
+                        ),
+                    ));
+                }
+                config.model.joints = Some(width);
+                config.model.joint_names = model.config().joint_names.clone();
                 // A read-out of joints from frames asked for, which the file may lack.
                 if config.model.frame_joints == Some(true) {
                     model.reading_frame_joints(&device)?
@@ -127,7 +143,8 @@ impl Trainer {
         // for a run on that file's data, and right for other data (the original DMBN data's
         // joints lie radians away from the simulator's: the file's statistics would feed the
         // network values hundreds of σ off).
-        let normalization = Normalization::fit(train.joints()).scaled(config.joint_scale);
+        let normalization = Normalization::fit(config.model.joint_count(), train.joints())
+            .scaled(config.joint_scale);
         let optim = optimizer(&config);
         let state = CheckpointState {
             step: 0,
@@ -180,7 +197,11 @@ impl Trainer {
                 )
             })?,
         };
-        let split = Split::open(&data, state.config.val_fraction)?;
+        let split = Split::open_camera(
+            &data,
+            state.config.val_fraction,
+            state.config.camera.as_deref(),
+        )?;
         state.data = Some(data);
         let (model, _, _) = model::load_bytes(&model_bytes, &device)?;
         let optim = optimizer(&state.config)
@@ -189,11 +210,7 @@ impl Trainer {
                 path: Checkpoint::dir(out),
                 message: format!("optimizer.bpk: {e:?}"),
             })?;
-        let train = SequenceStore::open(
-            split.train.clone(),
-            state.config.model.image_size as u32,
-            state.config.frame_cache_mib << 20,
-        )?;
+        let train = open_store(&split.train, &state.config, &split)?;
         Self::assemble(state, out, model, optim, split, train, devices)
     }
 
@@ -237,7 +254,16 @@ impl Trainer {
             ..plain
         });
         // Held-out frames are read once, uncached: the validation batches are kept.
-        let mut val = SequenceStore::open(split.val, config.model.image_size as u32, 0)?;
+        let mut val = SequenceStore::open(
+            split.val.clone(),
+            config.model.image_size as u32,
+            0,
+            config.camera.as_deref(),
+            (
+                config.model.joint_count(),
+                "the training data's first sequence",
+            ),
+        )?;
         let pool = if val.is_empty() { &mut train } else { &mut val };
         let mut val_rng = Pcg64::seed_from_u64(config.seed ^ VAL_STREAM);
         let lengths = pool.lengths();
@@ -252,7 +278,7 @@ impl Trainer {
         let quality_set = (0..n)
             .map(|i| val.read(i * val.len() / n))
             .collect::<Result<_, _>>()?;
-        let batches = BatchStream::spawn(train, sampler, normalization, rng.clone())?;
+        let batches = BatchStream::spawn(train, sampler, normalization.clone(), rng.clone())?;
         Ok(Trainer {
             config,
             out: out.to_path_buf(),
@@ -466,7 +492,7 @@ impl Trainer {
             step: self.step,
             rng: self.rng.clone(),
             config: self.config.clone(),
-            normalization: self.normalization,
+            normalization: self.normalization.clone(),
             best_val: self.best_val,
             best_quality: self.best_quality,
             data: self.data.clone(),
@@ -480,4 +506,26 @@ fn optimizer(config: &TrainConfig) -> ModuleOptimizer {
     AdamConfig::new()
         .with_grad_clipping(Some(GradientClippingConfig::Norm(config.clip_norm)))
         .init()
+}
+
+/// The store of `sequences` of `split` (the run's training sequences), their joints checked
+/// against the model's count, frames of the run's camera and size.
+fn open_store(
+    sequences: &[crate::data::SequenceRef],
+    config: &TrainConfig,
+    split: &Split,
+) -> Result<SequenceStore, TrainError> {
+    let width = config.model.joint_count();
+    let reference = if split.joints.0 == width {
+        "the dataset's first sequence"
+    } else {
+        "the model being trained"
+    };
+    Ok(SequenceStore::open(
+        sequences.to_vec(),
+        config.model.image_size as u32,
+        config.frame_cache_mib << 20,
+        config.camera.as_deref(),
+        (width, reference),
+    )?)
 }

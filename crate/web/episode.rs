@@ -2,7 +2,7 @@ use wasm_bindgen::prelude::*;
 
 use super::argument::{self, floats, index};
 use super::Simulator;
-use crate::data::{Normalization, Sequence, JOINTS};
+use crate::data::{Normalization, Sequence};
 
 /// A whole recorded episode, kept in wasm memory; JS copies out only the arrays it asks for.
 #[wasm_bindgen]
@@ -37,19 +37,38 @@ impl Episode {
         self.inner.image_size
     }
 
-    /// Joint values as a `Float32Array(T × 7)`, step-major: 6 angles (rad), gripper.
+    /// Joint values a step (D): the simulator's UR5 has 7 (6 angles, gripper), its Panda 8.
+    #[wasm_bindgen(getter, js_name = jointCount)]
+    pub fn joint_count(&self) -> usize {
+        self.inner.joints.width()
+    }
+
+    /// Joint values as a `Float32Array(T × D)`, step-major (the simulator's: 6 angles in
+    /// radians, gripper).
     pub fn joints(&self) -> Vec<f32> {
-        self.inner.joints.as_flattened().to_vec()
+        self.inner.joints.values().to_vec()
     }
 
-    /// End effector as a `Float32Array(T × 7)`, step-major: xyz, orientation, gripper.
+    /// End effector as a `Float32Array(T × 7)`, step-major: xyz, orientation, gripper; empty
+    /// where the data has no `endpoint_<id>.txt`.
     pub fn endpoint(&self) -> Vec<f32> {
-        self.inner.endpoint.as_flattened().to_vec()
+        self.inner
+            .endpoint
+            .as_deref()
+            .unwrap_or_default()
+            .as_flattened()
+            .to_vec()
     }
 
-    /// Object position as a `Float32Array(T × 3)`, step-major.
+    /// Object position as a `Float32Array(T × 3)`, step-major; empty where the data has no
+    /// `object_<id>.txt`.
     pub fn object(&self) -> Vec<f32> {
-        self.inner.object.as_flattened().to_vec()
+        self.inner
+            .object
+            .as_deref()
+            .unwrap_or_default()
+            .as_flattened()
+            .to_vec()
     }
 
     /// Phase of each step as a `Float32Array(T)`, `linspace(0, 1, T)`.
@@ -80,20 +99,29 @@ impl Episode {
 
     /// How far the episode's joints lie from a model's joint normalisation (`Model.normalization`'s
     /// `mean` and `std`): the mean squared normalised joint value. The page offers the models
-    /// whose normalisation a folder's sequence fits best. Throws unless both have 7 values.
+    /// whose normalisation a folder's sequence fits best. Throws unless both have as many
+    /// values as the episode has joint values a step.
     #[wasm_bindgen(js_name = jointDistance)]
     pub fn joint_distance(
         &self,
         #[wasm_bindgen(unchecked_param_type = "Float32Array")] mean: JsValue,
         #[wasm_bindgen(unchecked_param_type = "Float32Array")] std: JsValue,
     ) -> Result<f64, JsError> {
-        let seven = |value: &JsValue, name| {
+        let d = self.inner.joints.width();
+        let values = |value: &JsValue, name| {
             let values = floats(value, name)?;
-            <[f32; JOINTS]>::try_from(values.as_slice())
-                .map_err(|_| argument::wrong(name, "a Float32Array of 7 values", value))
+            if values.len() == d {
+                Ok(values)
+            } else {
+                Err(argument::wrong(
+                    name,
+                    &format!("a Float32Array of {d} values (the episode's joint values a step)"),
+                    value,
+                ))
+            }
         };
-        let (mean, std) = (seven(&mean, "mean")?, seven(&std, "std")?);
-        Ok(Normalization { mean, std }.distance(&self.inner.joints))
+        let (mean, std) = (values(&mean, "mean")?, values(&std, "std")?);
+        Ok(Normalization { mean, std }.distance(self.inner.joints.rows()))
     }
 
     /// SHA-256 (hex) fingerprint of the episode, equal to the native `Sequence::digest`.
@@ -102,12 +130,19 @@ impl Episode {
     }
 }
 
-/// `runEpisode(action, seed, imageSize)`: simulate and render a whole episode in one call.
+/// `runEpisode(action, seed, imageSize)` for Rust callers: the UR5's episode.
+pub fn run_episode(action: JsValue, seed: JsValue, size: JsValue) -> Result<Episode, JsError> {
+    run_arm_episode(action, seed, size, JsValue::UNDEFINED)
+}
+
+/// `runEpisode(action, seed, imageSize, arm?)`: simulate and render a whole episode in one
+/// call; `arm` is "ur5" (left out) or "panda".
 #[wasm_bindgen(js_name = runEpisode)]
-pub fn run_episode(
+pub fn run_arm_episode(
     #[wasm_bindgen(unchecked_param_type = "string")] action: JsValue,
     #[wasm_bindgen(unchecked_param_type = "number")] seed: JsValue,
     #[wasm_bindgen(js_name = imageSize, unchecked_param_type = "number")] size: JsValue,
+    #[wasm_bindgen(unchecked_param_type = "string | undefined")] arm: JsValue,
 ) -> Result<Episode, JsError> {
-    Ok(Simulator::new(action, seed, size)?.run())
+    Ok(Simulator::new_with_arm(action, seed, size, arm)?.run())
 }

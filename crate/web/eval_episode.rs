@@ -26,9 +26,9 @@ impl EvalEpisode {
         self.inner.sequence.frames.clone()
     }
 
-    /// Shown joints, `Float32Array(T × 7)`.
+    /// Shown joints, `Float32Array(T × D)`.
     pub fn joints(&self) -> Vec<f32> {
-        self.inner.sequence.joints.as_flattened().to_vec()
+        self.inner.sequence.joints.values().to_vec()
     }
 
     /// Time stamp of every step, `Float32Array(T)` (permuted for p).

@@ -116,7 +116,7 @@ impl Folder {
     ) -> Result<Episode, JsError> {
         let size = image_size(&size)?;
         let result = self.sequence(&id, &action).and_then(|s| {
-            read_sequence_from(&self.files, &s.dir, s.id, Some(size)).map_err(JsError::from)
+            read_sequence_from(&self.files, &s.dir, s.id, None, Some(size)).map_err(JsError::from)
         });
         self.files.release();
         Ok(result?.into())

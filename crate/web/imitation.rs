@@ -4,7 +4,7 @@ use wasm_bindgen::prelude::*;
 use super::argument::{action, floats, image_size, indices, position};
 use super::Episode;
 use crate::imitate;
-use crate::sim::{self, Outcome, Trajectory};
+use crate::sim::{self, Arm, Outcome, Trajectory};
 
 /// A performance of a demonstration's action (`Model.imitate`, `replay`): the trajectory the
 /// arm was given, the recorded performance and its outcome.
@@ -51,9 +51,9 @@ impl Imitation {
             .map_err(|e| JsError::new(&e.to_string()))
     }
 
-    /// The trajectory performed, `Float32Array(T × 7)`: 6 angles (rad), gripper.
+    /// The trajectory performed, `Float32Array(T × D)`: the arm's angles (rad), gripper.
     pub fn trajectory(&self) -> Vec<f32> {
-        self.inner.trajectory.as_flattened().to_vec()
+        self.inner.trajectory.concat()
     }
 
     /// The recorded performance, as an `Episode` (frames, reached joints, object track).
@@ -91,7 +91,8 @@ pub fn replay(
 }
 
 /// `enact(episode, action, trajectory, observed)`: the arm performs `trajectory`, a
-/// `Float32Array(T × 7)` with a row per step of the demonstration `episode` (joint means
+/// `Float32Array(T × D)` (D the episode's joint values a step: its arm's) with a row per
+/// step of the demonstration `episode` (joint means
 /// predicted from its `observed` steps, a `Uint32Array`, by the page's workers), with the
 /// object where the demonstration had it, judged against it. Throws on a bad trajectory (a row
 /// count other than the episode's, NaN, an angle beyond ±2π) or an observed step past its end.
@@ -105,7 +106,9 @@ pub fn enact(
     let action = action(&action_value)?;
     let demo = episode.sequence();
     let trajectory = floats(&trajectory, "trajectory")?;
-    let rows = Trajectory::from_flat(&trajectory)?.rows().to_vec();
+    let arm = Arm::of_width(demo.joints.width())?;
+    let performed = Trajectory::from_flat_on(arm, &trajectory)?;
+    let rows: Vec<&[f32]> = performed.joints().rows().collect();
     let observed = indices(&observed, "observed")?;
     if let Some(k) = observed.iter().find(|&&k| k >= demo.len()) {
         return Err(JsError::new(&format!(

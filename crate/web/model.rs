@@ -47,7 +47,7 @@ impl ModelHandle {
         self.inner.model().kind().to_string()
     }
 
-    /// The joint normalisation the model was trained with, `{mean, std}` (7 values each): the
+    /// The joint normalisation the model was trained with, `{mean, std}` (D values each): the
     /// statistics of its training data.
     #[wasm_bindgen(getter)]
     pub fn normalization(&self) -> Result<JsValue, JsError> {
@@ -61,8 +61,20 @@ impl ModelHandle {
         self.inner.model().image_size()
     }
 
+    /// Joint values a step (D) the model reads and predicts: 7 for the original arm's.
+    #[wasm_bindgen(getter, js_name = jointCount)]
+    pub fn joint_count(&self) -> usize {
+        self.inner.joint_count()
+    }
+
+    /// A name for each joint value: the file's `joint_names`, or `joint 0` … `gripper`.
+    #[wasm_bindgen(getter, js_name = jointNames)]
+    pub fn joint_names(&self) -> Vec<String> {
+        self.inner.model().config().joint_labels()
+    }
+
     /// Predicts `targetTimes` from N observed steps: `frames` a `Uint8Array(N × S × S × 3)`
-    /// (RGB, as `Episode.frames`), `joints` a `Float32Array(N × 7)` (radians, gripper),
+    /// (RGB, as `Episode.frames`), `joints` a `Float32Array(N × D)` (`jointCount` values a step),
     /// `times` a `Float32Array(N)` of phases in [0, 1], `blend` in [0, 1] (1 = images only,
     /// 0 = joints only). Throws on bad input.
     pub fn predict(
@@ -294,13 +306,13 @@ impl Prediction {
         self.inner.image_sigma.clone()
     }
 
-    /// Mean joints, `Float32Array(T × 7)`, radians and gripper units.
+    /// Mean joints, `Float32Array(T × D)`, in the data's units (radians, gripper).
     #[wasm_bindgen(js_name = jointMean)]
     pub fn joint_mean(&self) -> Vec<f32> {
         self.inner.joint_mean.clone()
     }
 
-    /// σ of every joint, `Float32Array(T × 7)`.
+    /// σ of every joint, `Float32Array(T × D)`.
     #[wasm_bindgen(js_name = jointSigma)]
     pub fn joint_sigma(&self) -> Vec<f32> {
         self.inner.joint_sigma.clone()

@@ -6,11 +6,12 @@ Load the weights `dmbn export` writes and predict as `dmbn predict` does:
     import dmbn_torch
     model = dmbn_torch.load("dmbn-sim.safetensors")          # eval mode, on the CPU
     out = model.predict(frames, joints, times, target_times, blend=0.5)
-    out["joint_mean"], out["joint_sigma"]                     # [T, 7], radians
+    out["joint_mean"], out["joint_sigma"]                     # [T, D], joint units
     out["image_mean"], out["image_sigma"]                     # [T, S, S, 3], in [0, 1]
 
 `frames` are the observed RGB frames as uint8 `[N, S, S, 3]`, `joints` the observed joint
-values `[N, 7]` (not normalised), `times` their phases in [0, 1], `target_times` the phases to
+values `[N, D]` (not normalised; D the file's `joints`, 7 — 6 arm angles in radians and the
+gripper — for files without it), `times` their phases in [0, 1], `target_times` the phases to
 predict; `blend` is c: 1 = frames only, 0 = joints only. `save(model, path)` writes weights
 changed here in the file `dmbn import` reads.
 

@@ -1,12 +1,17 @@
 """The DMBN layout read as crate/data/reader.rs reads it, and the joint normalisation.
 
 `<root>/<id>/<action>/` folders (decimal ids, non-hidden action folders, sorted by id then
-action), each with `joint_<id>.txt` (T rows of 7 numbers) and frames `<k>.png|.jpeg|.jpg` for
-k = 0..T-1 (png preferred when a step has several; frames past the joint rows ignored). Frames
-are resized on reading: an exact, rounded area average when the size divides the stored one
-(128 → 64), otherwise image's triangle filter. PNG frames decode here without Pillow (zlib and
+action), each with `joint_<id>.txt` (T rows of D numbers, D the first row's, the same for every
+sequence of a dataset) and frames `<k>.png|.jpeg|.jpg` for k = 0..T-1 (png preferred when a
+step has several; frames past the joint rows ignored), those of another camera in
+`<camera>/<k>.png`. `object_<id>.txt` and `endpoint_<id>.txt` (optional) are not read: training
+needs joints and frames alone. An optional `dataset.json` at the root may name the joint
+values (`joint_names`). Frames are resized on reading to a square: an exact, rounded area
+average when a square frame's size divides the stored one (128 → 64), otherwise image's
+triangle filter (stretching another aspect). PNG frames decode here without Pillow (zlib and
 numpy, exact); JPEG frames need Pillow, which decodes everything faster where installed.
 """
+import json
 import math
 import os
 import struct
@@ -14,6 +19,7 @@ import zlib
 
 import numpy as np
 
+# Joint values a step of the original arm (6 angles, gripper): a fit with no rows gets as many.
 JOINTS = 7
 FRAME_EXTENSIONS = ["png", "jpeg", "jpg"]
 # Standard deviations below this are replaced by 1 (a column that never moves).
@@ -21,7 +27,7 @@ MIN_STD = 1e-6
 
 
 class Sequence:
-    """One recorded action: `joints` float32 [T, 7], `frames` uint8 [T, S, S, 3]."""
+    """One recorded action: `joints` float32 [T, D], `frames` uint8 [T, S, S, 3]."""
 
     def __init__(self, joints, frames):
         self.joints, self.frames = joints, frames
@@ -57,34 +63,92 @@ def sequences(root):
     return sorted(found, key=lambda s: (s[0], s[1]))
 
 
-def read_sequence(folder, id, image_size=None):
-    """The sequence in `folder`, frames resized to `image_size` pixels a side when given."""
-    return read_sequences([(id, folder)], image_size)[0]
+def read_sequence(folder, id, image_size=None, camera=None):
+    """The sequence in `folder`, frames (`camera`'s, default the folder's own) resized to
+    `image_size` pixels a side when given."""
+    return read_sequences([(id, folder)], image_size, camera)[0]
 
 
-def read_sequences(listed, image_size=None):
-    """The sequences of (id, folder) pairs; their frames decode together (faster)."""
-    joints = [read_table(os.path.join(folder, f"joint_{id}.txt")) for id, folder in listed]
-    paths = [frame_paths(folder, len(j)) for (_, folder), j in zip(listed, joints)]
+def read_sequences(listed, image_size=None, camera=None):
+    """The sequences of (id, folder) pairs, `camera`'s frames (the sub-folder `<camera>/`;
+    None: those in the folder itself); their frames decode together (faster). Every sequence
+    must have the first's joint values a step (an error names the first file that differs).
+    Without `image_size`, square frames stay as stored and others are stretched to the square
+    of their longer side (as the Rust reader)."""
+    joints, first = [], None
+    for id, folder in listed:
+        path = os.path.join(folder, f"joint_{id}.txt")
+        table = read_table(path)
+        if first is None:
+            first = path
+        elif table.shape[1] != joints[0].shape[1]:
+            raise ValueError(f"{path}: {table.shape[1]} joint values a step, expected "
+                             f"{joints[0].shape[1]} as in {first} (every sequence of a "
+                             "dataset, and the model, has the same joints)")
+        joints.append(table)
+    if camera is not None and listed:
+        check_camera(listed[0][1], camera)
+    paths = [frame_paths(camera_folder(folder, camera), len(j))
+             for (_, folder), j in zip(listed, joints)]
     decoded = decode_frames([p for ps in paths for p in ps])
     out, at = [], 0
     for j, ps in zip(joints, paths):
         mine, at = decoded[at:at + len(ps)], at + len(ps)
         size = mine[0].shape
         for path, frame in zip(ps, mine):
-            if frame.shape != size or size[0] != size[1]:
+            if frame.shape != size:
                 h, w = frame.shape[:2]
-                raise ValueError(f"{path}: a {w}x{h} frame, expected {size[0]}x{size[0]} "
-                                 "(square, as the sequence's first)")
+                raise ValueError(f"{path}: a {w}x{h} frame, expected {size[1]}x{size[0]} "
+                                 "(as the sequence's first)")
         frames = np.stack(mine)
-        if image_size and image_size != frames.shape[1]:
-            frames = resize(frames, image_size)
+        side = image_size or max(size[:2])
+        if (side, side) != size[:2]:
+            frames = resize(frames, side)
         out.append(Sequence(j, frames))
     return out
 
 
-def read_table(path, columns=JOINTS):
-    """Whitespace-separated rows of `columns` finite numbers; trailing blank lines allowed."""
+def camera_folder(folder, camera):
+    """The folder holding `camera`'s frames: `<folder>/<camera>/`, or `folder` itself."""
+    return folder if camera is None else os.path.join(folder, camera)
+
+
+def check_camera(folder, camera):
+    """An error naming the cameras of `folder` (a sequence's) unless it has `camera`."""
+    cameras = sorted(c for c in os.listdir(folder) if os.path.isdir(os.path.join(folder, c)))
+    if camera.startswith(".") or "/" in camera or camera not in cameras:
+        raise ValueError(f"{folder}: no camera {camera!r}: expected a sub-folder of that name "
+                         "holding its frames; the cameras here are the default (<k>.png)"
+                         + "".join(f", {c}" for c in cameras))
+
+
+def dataset_names(root, joints):
+    """The joint names of `root`'s `dataset.json` (None where it has no file or no names),
+    checked against the data's `joints` values a step."""
+    path = os.path.join(root, "dataset.json")
+    if not os.path.isfile(path):
+        return None
+    try:
+        with open(path, encoding="utf-8") as f:
+            meta = json.load(f)
+    except ValueError as e:
+        raise ValueError(f"{path}: {e}: expected a JSON object with optional joint_names "
+                         "(a list of strings), cameras, fps, source") from None
+    names = meta.get("joint_names") if isinstance(meta, dict) else None
+    if names is None:
+        return None
+    if (not isinstance(names, list) or not names
+            or not all(isinstance(n, str) and n.strip() for n in names)):
+        raise ValueError(f"{path}: joint_names: expected a non-empty name for every joint value")
+    if len(names) != joints:
+        raise ValueError(f"{path}: joint_names: {len(names)} names, expected {joints} (the "
+                         "joint values a step of its sequences)")
+    return names
+
+
+def read_table(path, columns=None):
+    """Whitespace-separated rows of `columns` finite numbers (None: as many as the first row
+    has); trailing blank lines allowed."""
     with open(path, encoding="utf-8") as f:
         lines = f.read().splitlines()
     while lines and not lines[-1].strip():
@@ -92,8 +156,9 @@ def read_table(path, columns=JOINTS):
     rows = []
     for i, line in enumerate(lines, 1):
         fields = line.split()
-        if len(fields) != columns:
-            raise ValueError(f"{path}:{i}: {len(fields)} values, expected {columns}")
+        columns = columns or len(fields)
+        if len(fields) != columns or not columns:
+            raise ValueError(f"{path}:{i}: {len(fields)} values, expected {max(columns, 1)}")
         try:
             row = [float(v) for v in fields]
         except ValueError:
@@ -222,17 +287,20 @@ def _unfilter(rows, bpp):
 
 
 def resize(frames, target):
-    """[T, S, S, 3] uint8 frames to `target` pixels a side, as reader.rs `resize`: an exact,
-    rounded area average when `target` divides S, otherwise image's triangle filter (rows,
-    then columns; within a level of image's own, float summation order aside)."""
-    t, s = frames.shape[:2]
-    if target < s and s % target == 0:
-        f = s // target
+    """[T, H, W, 3] uint8 frames to `target` pixels a side, as reader.rs `resize`: an exact,
+    rounded area average when the frames are square and `target` divides their size,
+    otherwise image's triangle filter (rows, then columns, each axis by its own ratio: another
+    aspect is stretched to the square; within a level of image's own, float summation order
+    aside, and for non-square frames possibly another level or so by interpolation
+    rounding)."""
+    t, h, w = frames.shape[:3]
+    if h == w and target < h and h % target == 0:
+        f = h // target
         blocks = frames.reshape(t, target, f, target, f, 3).astype(np.uint32).sum((2, 4))
         return ((blocks + f * f // 2) // (f * f)).astype(np.uint8)
-    w = _triangle_weights(s, target)
-    columns = np.einsum("ys,tsxc->tyxc", w, frames.astype(np.float32))
-    out = np.einsum("xs,tysc->tyxc", w, columns)
+    rows, cols = _triangle_weights(h, target), _triangle_weights(w, target)
+    columns = np.einsum("ys,tsxc->tyxc", rows, frames.astype(np.float32))
+    out = np.einsum("xs,tysc->tyxc", cols, columns)
     return np.floor(np.clip(out, 0, 255) + 0.5).astype(np.uint8)
 
 
@@ -260,24 +328,29 @@ class Normalization:
         self.std = np.asarray(std, np.float32)
 
     @classmethod
-    def fit(cls, joint_arrays):
-        """Normalization::fit: sums in f64, a column with std below MIN_STD gets 1."""
-        rows = np.concatenate([np.asarray(j, np.float64) for j in joint_arrays])
+    def fit(cls, joint_arrays, joints=None):
+        """Normalization::fit: sums in f64, a column with std below MIN_STD gets 1; no rows
+        give the identity of `joints` values (default: the arrays', else 7)."""
+        arrays = [np.asarray(j, np.float64) for j in joint_arrays]
+        joints = joints or (arrays[0].shape[1] if arrays else JOINTS)
+        rows = np.concatenate(arrays) if arrays else np.zeros((0, joints))
         if not len(rows):
-            return cls(np.zeros(JOINTS), np.ones(JOINTS))
+            return cls(np.zeros(joints), np.ones(joints))
         mean = rows.sum(0) / len(rows)
         var = np.maximum((rows * rows).sum(0) / len(rows) - mean * mean, 0.0)
         std = np.sqrt(var).astype(np.float32)
         return cls(mean.astype(np.float32), np.where(std < MIN_STD, np.float32(1), std))
 
     def scaled(self, joint_scale):
-        """Normalization::scaled: "shared" divides the six arm angles by one scale, the root
-        mean square of their standard deviations (the gripper keeps its own)."""
+        """Normalization::scaled: "shared" divides all values but the last (the original's six
+        arm angles) by one scale, the root mean square of their standard deviations; the last
+        (the gripper, by the layout's convention) keeps its own. One value: unchanged."""
         if joint_scale not in ("per-joint", "shared"):
             raise ValueError(f"joint_scale {joint_scale!r}: expected per-joint or shared")
         std = self.std.copy()
+        arm = max(len(std) - 1, 1)
         if joint_scale == "shared":
-            std[:6] = np.sqrt((std[:6] * std[:6]).sum(dtype=np.float32) / np.float32(6))
+            std[:arm] = np.sqrt((std[:arm] * std[:arm]).sum(dtype=np.float32) / np.float32(arm))
         return Normalization(self.mean, std)
 
     def normalize(self, joints):
@@ -291,7 +364,7 @@ class Split:
     """Training and validation sequences split by id (both actions of an id on one side): the
     last `val_fraction` of the ids, at least one when there are two or more; none for 0."""
 
-    def __init__(self, root, image_size, val_fraction):
+    def __init__(self, root, image_size, val_fraction, camera=None):
         if not 0.0 <= val_fraction < 1.0:
             raise ValueError(f"--val-fraction {val_fraction}: expected a value in [0, 1)")
         listed = sequences(root)
@@ -301,7 +374,10 @@ class Split:
             held = max(1, math.ceil(len(ids) * val_fraction))
         self.val_ids = ids[len(ids) - held:]
         self.train, self.val = [], []
-        read = read_sequences([(id, folder) for id, _, folder in listed], image_size)
+        read = read_sequences([(id, folder) for id, _, folder in listed], image_size, camera)
+        # The data's joint values a step (D) and, from dataset.json, their names.
+        self.joints = read[0].joints.shape[1]
+        self.joint_names = dataset_names(root, self.joints)
         for (id, _, _), seq in zip(listed, read):
             (self.val if id in self.val_ids else self.train).append(seq)
         if not self.train:

@@ -2,7 +2,8 @@
 reads at each glimpse, seen side by side, correct their linear interpolation at each target.
 
 `mirror_inputs` builds the features exactly as crate/model/mirror_inputs.rs does; `Mirror`
-holds the tensors `dmbn export` writes under `mirror.` (`train --mirror` fits them).
+holds the tensors `dmbn export` writes under `mirror.` (`train --mirror` fits them). Sized by
+the model's D joint values a step (7 for the original arm).
 """
 import math
 
@@ -13,14 +14,27 @@ import torch.nn.functional as F
 JOINTS = 7
 SLOTS = 8
 FREQUENCIES = 8
-SLOT = JOINTS + 2
-INPUTS = SLOTS * SLOT + JOINTS + 1 + 2 * FREQUENCIES
 LAYERS = 3
 SIGMA_FLOOR = 1e-4
 
 
+def slot_width(joints):
+    """Values per slot: the D read joints, the glimpse's time less the target's, 1 (filled)."""
+    return joints + 2
+
+
+def input_width(joints):
+    """Features per target: the slots, the interpolated reads, the phase, its sines and cosines."""
+    return SLOTS * slot_width(joints) + joints + 1 + 2 * FREQUENCIES
+
+
+# The original arm's (D = 7) widths.
+SLOT = slot_width(JOINTS)
+INPUTS = input_width(JOINTS)
+
+
 def interpolate(times, reads, targets):
-    """`reads` [K, 7] at sorted `times` [K] linearly interpolated at `targets` [M], held
+    """`reads` [K, D] at sorted `times` [K] linearly interpolated at `targets` [M], held
     beyond the first and the last."""
     if len(times) == 1:
         return reads[:1].expand(len(targets), -1)
@@ -33,11 +47,12 @@ def interpolate(times, reads, targets):
 
 
 def mirror_inputs(times, reads, targets):
-    """The features [M, INPUTS] and the interpolated reads [M, 7] at `targets` (phases) for
-    glimpses at `times` [K] (any order) read as `reads` [K, 7]."""
+    """The features [M, input_width(D)] and the interpolated reads [M, D] at `targets` (phases)
+    for glimpses at `times` [K] (any order) read as `reads` [K, D]."""
     order = torch.sort(times, stable=True).indices
     times, reads = times[order], reads[order]
     start = interpolate(times, reads, targets)
+    slot = slot_width(reads.shape[1])
     rows = []
     for m, phase in enumerate(targets):
         near = torch.arange(len(times))
@@ -46,18 +61,21 @@ def mirror_inputs(times, reads, targets):
         slots = torch.cat([reads[near], (times[near] - phase).unsqueeze(1),
                            torch.ones(len(near), 1)], 1).flatten()
         angle = math.pi * phase * torch.arange(1, FREQUENCIES + 1, dtype=torch.float32)
-        rows.append(torch.cat([slots, torch.zeros((SLOTS - len(near)) * SLOT), start[m],
+        rows.append(torch.cat([slots, torch.zeros((SLOTS - len(near)) * slot), start[m],
                                phase.reshape(1), angle.sin(), angle.cos()]))
     return torch.stack(rows), start
 
 
 class Mirror(nn.Module):
-    def __init__(self, width):
+    """The stage of hidden `width` for D = `joints` values a step."""
+
+    def __init__(self, width, joints=JOINTS):
         super().__init__()
-        self.scale = nn.Parameter(torch.ones(INPUTS), requires_grad=False)
-        self.layers = nn.ModuleList(nn.Linear(w, width) for w in [INPUTS] + [width] * (LAYERS - 1))
-        self.mean = nn.Linear(width, JOINTS)
-        self.sigma = nn.Linear(width, JOINTS)
+        inputs = input_width(joints)
+        self.scale = nn.Parameter(torch.ones(inputs), requires_grad=False)
+        self.layers = nn.ModuleList(nn.Linear(w, width) for w in [inputs] + [width] * (LAYERS - 1))
+        self.mean = nn.Linear(width, joints)
+        self.sigma = nn.Linear(width, joints)
 
     def forward(self, x, start):
         h = x / self.scale
@@ -66,5 +84,5 @@ class Mirror(nn.Module):
         return start + self.mean(h), F.softplus(self.sigma(h.detach())) + SIGMA_FLOOR
 
     def predict(self, times, reads, targets):
-        """Mean and σ [M, 7] (radians and gripper units) at `targets`."""
+        """Mean and σ [M, D] (joint units: the original's radians and gripper) at `targets`."""
         return self(*mirror_inputs(times, reads, targets))

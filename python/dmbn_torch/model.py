@@ -21,8 +21,8 @@ JOINT_ENCODER_LAYERS = [32, 64, 64, 128, 128, 256]
 JOINT_DECODER_LAYERS = [512, 216, 128, 32]
 IMAGE_DECODER_TAIL = [16, 8]
 SHARED = 1024
+# Joint values a step (D) of files without `joints`: the original arm's 6 angles and gripper.
 JOINTS = 7
-START_FEATURES = 9
 ATTENTION_HEADS = 8
 # How fast the attentive model's own predictions fade in away from an observation (start.rs).
 OBSERVED_WIDTH = 0.02
@@ -30,6 +30,16 @@ OBSERVED_WIDTH = 0.02
 MASKED_SCORE = -1.0e4
 # Target times decoded per forward pass (Predictor::CHUNK).
 CHUNK = 25
+
+
+def joint_count(config):
+    """Joint values a step (D): the header's `joints`, 7 for files written before other robots."""
+    return config.get("joints") or JOINTS
+
+
+def start_features(joints):
+    """Width of the attentive model's start features: the interpolated joints and 2 gaps."""
+    return joints + 2
 
 
 def image_encoder_filters(config):
@@ -200,18 +210,18 @@ class ImageDecoder(nn.Module):
 
 
 class JointDecoder(nn.Module):
-    """Dense 512, 216, 128, 32 (ReLU), mean and σ heads; given a start, the mean is a scaled
-    correction of the interpolated observations."""
+    """Dense 512, 216, 128, 32 (ReLU), mean and σ heads (D outputs each); given a start, the
+    mean is a scaled correction of the interpolated observations."""
 
-    def __init__(self, sigma_floor):
+    def __init__(self, sigma_floor, joints):
         super().__init__()
         inputs, layers = SHARED, []
         for width in JOINT_DECODER_LAYERS:
             layers.append(nn.Linear(inputs, width))
             inputs = width
         self.layers = nn.ModuleList(layers)
-        self.mean = nn.Linear(inputs, JOINTS)
-        self.sigma = nn.Linear(inputs, JOINTS)
+        self.mean = nn.Linear(inputs, joints)
+        self.sigma = nn.Linear(inputs, joints)
         self.sigma_floor = sigma_floor
 
     def forward(self, x, start=None):
@@ -226,13 +236,15 @@ class JointDecoder(nn.Module):
 
 class Decoder(nn.Module):
     """The shared Dense 1024 + ReLU, then the image and joint decoders (`image_shape`: the
-    image decoder's (blocks, tail, coarse_tail), as `image_decoder_shape` returns them)."""
+    image decoder's (blocks, tail, coarse_tail), as `image_decoder_shape` returns them;
+    `joints`: D)."""
 
-    def __init__(self, inputs, image_shape, sigma_floor, gated=False):
+    def __init__(self, inputs, image_shape, sigma_floor, joints, gated=False):
         super().__init__()
         self.shared = nn.Linear(inputs, SHARED)
         self.image = ImageDecoder(*image_shape, sigma_floor, gated)
-        self.joint = JointDecoder(sigma_floor)
+        self.joint = JointDecoder(sigma_floor, joints)
+        self.joint_values = joints  # D (`joints` is the joint-only decoding)
 
     def forward(self, x, start=None):
         b, m, _ = x.shape
@@ -244,17 +256,17 @@ class Decoder(nn.Module):
             "image_mean": image_mean.reshape(b, m, 3, s, s),
             "image_sigma": image_sigma.reshape(b, m, 3, s, s),
             "image_drawn": None if drawn is None else drawn.reshape(b, m, 3, s, s),
-            "joint_mean": joint_mean.reshape(b, m, JOINTS),
-            "joint_sigma": joint_sigma.reshape(b, m, JOINTS),
+            "joint_mean": joint_mean.reshape(b, m, self.joint_values),
+            "joint_sigma": joint_sigma.reshape(b, m, self.joint_values),
         }
 
     def joints(self, x, start=None):
-        """Only the joints' mean and σ, [B, M, 7] each: the image decoder, most of a target's
+        """Only the joints' mean and σ, [B, M, D] each: the image decoder, most of a target's
         cost, is skipped (joint-only training targets)."""
         b, m, _ = x.shape
         x = F.relu(self.shared(x.reshape(b * m, -1)))
         mean, sigma = self.joint(x, start and start.joints())
-        return mean.reshape(b, m, JOINTS), sigma.reshape(b, m, JOINTS)
+        return mean.reshape(b, m, self.joint_values), sigma.reshape(b, m, self.joint_values)
 
 
 def masked_mean(z, mask):
@@ -271,7 +283,7 @@ def blend(image, joint, c):
 
 class Contexts:
     """One batch of observations, as the model sees them: `frames` [B, N, 3, S, S] in [0, 1],
-    normalised `joints` [B, N, 7], `times` [B, N], `mask` [B, N] (1 real, 0 padding) and the
+    normalised `joints` [B, N, D], `times` [B, N], `mask` [B, N] (1 real, 0 padding) and the
     blending coefficient `blend` [B]."""
 
     def __init__(self, frames, joints, times, mask, blend):
@@ -284,10 +296,10 @@ class Dmbn(nn.Module):
 
     def __init__(self, config):
         super().__init__()
-        h = config["hidden"]
+        h, d = config["hidden"], joint_count(config)
         self.image_encoder = ImageEncoder(4, image_encoder_filters(config), h)
-        self.joint_encoder = JointEncoder(8, h)
-        self.decoder = Decoder(h + 1, image_decoder_shape(config), config["sigma_floor"])
+        self.joint_encoder = JointEncoder(d + 1, h)
+        self.decoder = Decoder(h + 1, image_decoder_shape(config), config["sigma_floor"], d)
 
     def encode(self, c):
         b, n, _, s, _ = c.frames.shape
@@ -314,7 +326,7 @@ class _PteEncoders(nn.Module):
     def _pte_init(self, config):
         h = config["hidden"]
         self.image_encoder = ImageEncoder(3, image_encoder_filters(config), h)
-        self.joint_encoder = JointEncoder(7, h)
+        self.joint_encoder = JointEncoder(joint_count(config), h)
         self.time = TimeProjection(h)
         self.image_projection = ContextProjection(h)
         self.joint_projection = ContextProjection(h)
@@ -335,7 +347,7 @@ class DmbnPte(_PteEncoders):
         super().__init__()
         self._pte_init(config)
         self.decoder = Decoder(config["hidden"], image_decoder_shape(config),
-                               config["sigma_floor"])
+                               config["sigma_floor"], joint_count(config))
 
     def encode(self, c):
         image, joint = self.encode_contexts(c)
@@ -382,7 +394,7 @@ class Start:
     def joints(self):
         b, m, _ = self.weights.shape
         scale = 1 - self.nearness() * self.observed[:, 1, None]
-        return self.interpolated_joints().reshape(b * m, JOINTS), scale.reshape(b * m, 1)
+        return self.interpolated_joints().reshape(b * m, -1), scale.reshape(b * m, 1)
 
 
 def interpolation(target_times, times, mask):
@@ -421,16 +433,16 @@ class DmbnAttn(_PteEncoders):
     def __init__(self, config):
         super().__init__()
         self._pte_init(config)
-        h = config["hidden"]
+        h, d = config["hidden"], joint_count(config)
         heads = config.get("heads") or ATTENTION_HEADS
         self.time_embedding = TimeEmbedding(h)
         self.image_attention = MultiHeadAttention(h, heads)
         self.joint_attention = MultiHeadAttention(h, heads)
         self.observed = nn.Parameter(torch.zeros(2, h))
-        self.start_projection = nn.Linear(START_FEATURES, h)
-        self.decoder = Decoder(h, image_decoder_shape(config), config["sigma_floor"],
+        self.start_projection = nn.Linear(start_features(d), h)
+        self.decoder = Decoder(h, image_decoder_shape(config), config["sigma_floor"], d,
                                gated=True)
-        self.frame_joints = nn.Linear(h, JOINTS) if config.get("frame_joints") else None
+        self.frame_joints = nn.Linear(h, d) if config.get("frame_joints") else None
 
     def encode(self, c):
         image, joint = self.encode_contexts(c)
@@ -473,9 +485,18 @@ class Predictor(nn.Module):
         self.header = header
         self.config = header["config"]
         self.normalization = header["normalization"]
+        self.joints = joint_count(self.config)
+        for field in ["mean", "std"]:
+            if len(self.normalization[field]) != self.joints:
+                raise ValueError(f"normalization {field}: {len(self.normalization[field])} "
+                                 f"values, expected {self.joints} (the model's joints)")
+        names = self.config.get("joint_names")
+        if names is not None and len(names) != self.joints:
+            raise ValueError(f"joint_names: {len(names)} names, expected {self.joints}")
         self.network = KINDS[self.config["kind"]](self.config)
         # The mirror stage, where the file has one: the joints from frames alone (blend 1).
-        self.mirror = Mirror(self.config["mirror"]) if self.config.get("mirror") else None
+        mirror = self.config.get("mirror")
+        self.mirror = Mirror(mirror, self.joints) if mirror else None
 
     def state_dict_for_export(self):
         return {k.removeprefix("network."): v for k, v in self.state_dict().items()}
@@ -489,7 +510,10 @@ class Predictor(nn.Module):
             raise ValueError(f"frames: expected [N, {s}, {s}, 3] uint8, found {list(frames.shape)}")
         mean = torch.tensor(self.normalization["mean"], device=device)
         std = torch.tensor(self.normalization["std"], device=device)
-        joints = (torch.as_tensor(joints, dtype=torch.float32, device=device) - mean) / std
+        joints = torch.as_tensor(joints, dtype=torch.float32, device=device)
+        if joints.dim() != 2 or joints.shape[1] != self.joints:
+            raise ValueError(f"joints: expected [N, {self.joints}], found {list(joints.shape)}")
+        joints = (joints - mean) / std
         n = joints.shape[0]
         contexts = Contexts(
             frames=(frames.to(device).float() / 255.0).permute(0, 3, 1, 2).unsqueeze(0),

@@ -84,20 +84,20 @@ class SamplerConfig:
 def sample(cfg, pool, norm, seed, step, slots, stream=TRAIN_STREAM):
     """The batch's sequence slots `slots` (a range of 0..cfg.batch) as numpy arrays, shaped
     as augment::Batch (N = max_contexts, padding zero with mask 0) plus the joint-only
-    targets."""
+    targets (D joint values a step, the pool's)."""
     b, n_max, m, mj = len(slots), cfg.max_contexts, cfg.targets, cfg.joint_targets
-    s = pool[0].frames.shape[1]
+    s, d = pool[0].frames.shape[1], pool[0].joints.shape[1]
     out = {
         "context_images": np.zeros((b, n_max, 3, s, s), np.float32),
-        "context_joints": np.zeros((b, n_max, 7), np.float32),
+        "context_joints": np.zeros((b, n_max, d), np.float32),
         "context_times": np.zeros((b, n_max), np.float32),
         "context_mask": np.zeros((b, n_max), np.float32),
         "target_images": np.zeros((b, m, 3, s, s), np.float32),
-        "target_joints": np.zeros((b, m, 7), np.float32),
+        "target_joints": np.zeros((b, m, d), np.float32),
         "target_times": np.zeros((b, m), np.float32),
         "blend": np.zeros(b, np.float32),
         "joint_target_times": np.zeros((b, mj), np.float32),
-        "joint_target_joints": np.zeros((b, mj, 7), np.float32),
+        "joint_target_joints": np.zeros((b, mj, d), np.float32),
     }
     for i, slot in enumerate(slots):
         rng = np.random.default_rng([seed, stream, step, slot])

@@ -8,6 +8,10 @@ of the step (constant; cosine to 5% at the last step; ×0.3 every third of the r
     python -m dmbn_torch.train --data DIR --model pte --steps 2000 --out runs/pte --seed 1
     torchrun --nproc_per_node N -m dmbn_torch.train ...      # DDP: gloo on CPUs, nccl on GPUs
 
+The joint values a step (D) come from the data (the model's config gets `joints`, and
+`joint_names` from the dataset's dataset.json where it names them); --camera picks another
+camera's frames (`<seq>/<camera>/<k>.png`).
+
 --out gets metrics.jsonl (as train's), checkpoint.pt every --checkpoint-every steps (written
 to a temporary file and renamed over the last) and, at the end, model.safetensors, which
 `dmbn import --from model.safetensors --out model.dmbn` turns into a model file. Under DDP each
@@ -28,7 +32,7 @@ from torch import nn
 from .data import Normalization, Split
 from .init import initialise
 from .loss import PARTS, objective, tensors
-from .model import Predictor, load, save
+from .model import Predictor, joint_count, load, save
 from .sampler import VAL_STREAM, SamplerConfig, TimeWarp, contexts_as_targets, sample
 
 F32_MIN_POSITIVE = 1.1754944e-38
@@ -99,7 +103,8 @@ def train_config(args):
     model = {"kind": args.model, "image_size": args.image_size, "hidden": 128,
              "sigma_floor": args.sigma_floor, "joint_weight": args.joint_weight, "heads": None,
              "decoder_filters": args.decoder_filters, "coarse_tail": args.coarse_tail or None,
-             "encoder_filters": args.encoder_filters, "frame_joints": args.frame_joints or None}
+             "encoder_filters": args.encoder_filters, "frame_joints": args.frame_joints or None,
+             "joints": None, "joint_names": None}  # from the data (Run)
     if args.init:
         header = load(args.init).header
         file = header["config"]
@@ -127,6 +132,7 @@ def train_config(args):
         "checkpoint_every": args.checkpoint_every,
         "augment": warp.to_json() if warp else None, "init": args.init, "half": args.half,
         "initialization": args.initialization, "joint_scale": args.joint_scale,
+        "camera": args.camera,
     }
     for field in ["steps", "batch", "max_contexts", "targets_per_sequence", "val_every",
                   "checkpoint_every"]:
@@ -170,6 +176,8 @@ class Run:
             if args.model and args.model != trained:
                 raise ValueError(f"the checkpoint in {args.out} trains {trained}, not "
                                  f"{args.model}: leave --model out to resume it")
+            if args.camera is not None:
+                raise ValueError("--camera: a resumed run keeps its run's camera")
             self.config["steps"] = args.steps or self.config["steps"]
             self.config["half"] = self.config["half"] or args.half
             self.data = args.data or state["data"]
@@ -181,7 +189,9 @@ class Run:
                 raise ValueError("--data and --steps are needed (unless --resume)")
             self.config, self.data, state = train_config(args), os.path.abspath(args.data), None
         c = self.config
-        self.split = Split(self.data, c["model"]["image_size"], c["val_fraction"])
+        self.split = Split(self.data, c["model"]["image_size"], c["val_fraction"],
+                           c.get("camera"))
+        self.sized_by_data(c["model"], state, args)
         if state:
             self.normalization = Normalization(**state["normalization"])
         else:
@@ -221,6 +231,21 @@ class Run:
         if world.rank == 0:
             os.makedirs(args.out, exist_ok=True)
             self.keep_metrics_through(self.step)
+
+    def sized_by_data(self, model, state, args):
+        """The model's joint values a step (D) and their names: the data's (fresh weights),
+        held to the file's (--init, which keeps its names) or to the run's (--resume)."""
+        width = self.split.joints
+        if state is None and not self.config["init"]:
+            model["joints"], model["joint_names"] = width, self.split.joint_names
+            return
+        if joint_count(model) != width:
+            source = (f"the run in {args.out}" if state is not None
+                      else f"--init {self.config['init']}")
+            raise ValueError(f"{source}: the model has {joint_count(model)} joint values a "
+                             f"step, the data at {self.data} has {width}: start from a model "
+                             "of this robot")
+        model["joints"], model["joint_names"] = width, model.get("joint_names")
 
     def keep_metrics_through(self, step):
         """metrics.jsonl without the lines of steps after `step` (those a resume repeats)."""
@@ -330,6 +355,8 @@ def arguments(argv=None):
     a("--coarse-tail", action="store_true")
     a("--encoder-filters", type=lambda s: [int(v) for v in s.split(",")])
     a("--frame-joints", action="store_true")
+    a("--camera", help="the camera whose frames the model sees: the sub-folder of that name in "
+                       "each sequence folder (default: the frames in the folder itself)")
     a("--lr", type=float, default=1e-4)
     a("--schedule", choices=["constant", "cosine", "step"], default="constant")
     a("--clip-norm", type=float, default=1.0, help="largest norm of each parameter's gradient")

@@ -169,11 +169,11 @@ const ENTRIES = {
 const NO_PARAMETERS = {
   Contexts: ["isEmpty", "len"],
   Encoding: [],
-  Episode: ["digest", "endpoint", "frames", "imageSize", "joints", "len", "object", "times"],
+  Episode: ["digest", "endpoint", "frames", "imageSize", "jointCount", "joints", "len", "object", "times"],
   EvalEpisode: ["frames", "joints", "len", "times"],
   Folder: ["root", "sequences"],
   Imitation: ["jointRmse", "observed", "outcome", "performance", "predictedFrom", "trajectory"],
-  Model: ["imageSize", "kind", "normalization"],
+  Model: ["imageSize", "jointCount", "jointNames", "kind", "normalization"],
   Prediction: ["imageMean", "imageSigma", "jointMean", "jointSigma", "len", "maxImageSigma", "meanFrame", "meanFrames", "pixelSigma", "sigmaMap"],
   Simulator: ["endpoint", "frame", "imageSize", "joints", "len", "object", "run", "stepIndex", "step"],
 };

@@ -8,8 +8,9 @@ import { join } from "node:path";
 import { before, describe, test } from "node:test";
 import { pathToFileURL } from "node:url";
 
-import { writeBrokenFolders, writeFolder } from "./folders.mjs";
-import { ARTIFACTS, close, errorText, open, pause, predict, ROOT, server, shot, waitState } from "./support.mjs";
+import { writeBrokenFolders, writeFolder, writeRobotFolder } from "./folders.mjs";
+import { widenModel } from "./models.mjs";
+import { ARTIFACTS, close, errorText, open, pause, predict, ROOT, server, shot, virtualFiles, waitState } from "./support.mjs";
 
 const FOLDERS = join(ARTIFACTS, "folders");
 let wasm;
@@ -113,6 +114,128 @@ describe("open a dataset", () => {
     }
     // The console saw exactly the errors shown.
     assert.equal(page.problems.length, cases.length, page.problems.join("\n"));
+    await close(page);
+  });
+
+  test("a folder without object and endpoint files: everything that needs no object works", async () => {
+    const dir = join(FOLDERS, "no-object");
+    writeFolder(wasm, dir, [{ action: "grasp", seed: 5 }, { action: "grasp", seed: 6 }], 64, { object: false });
+    const page = await open(`${server.url}www/?workers=2`);
+    await waitState(page, "ready");
+    await openFolder(page, dir);
+    assert.equal(await page.locator("#error").isHidden(), true, await errorText(page));
+    await waitState(page, "ready");
+    const models = await page.evaluate(() => [...document.getElementById("model").options].map((o) => o.value));
+    assert.deepEqual(models, ["attn", "dmbn", "pte", "pte-aug"]);
+    assert.equal(await page.getAttribute("#joints-plot", "data-panels"), "7");
+    await pause(page);
+    await predict(page);
+    await page.selectOption("#sequence", "6/grasp");
+    await page.waitForFunction(() => /\/6\/grasp:/.test(document.getElementById("object-info").textContent));
+    await predict(page, () => page.selectOption("#mode", "p"));
+    // Live mode forecasts, and its error (forecastError) joins the plot.
+    const before = await predictions(page);
+    await page.selectOption("#mode", "live");
+    await page.waitForFunction((n) => Number(document.body.dataset.predictions) > n || document.body.dataset.state === "error", before);
+    assert.notEqual(await page.evaluate(() => document.body.dataset.state), "error", await errorText(page));
+    await page.waitForFunction(() => Number(document.getElementById("error-plot").dataset.points) > 0);
+    assert.deepEqual(page.problems, []);
+    await close(page);
+  });
+
+  test("another robot's data (8 joint values a step): a 7-value model is refused, saying both counts", async () => {
+    const dir = join(FOLDERS, "robot8");
+    writeRobotFolder(dir, { ids: [0, 1], action: "move", steps: 12, joints: 8, width: 40, height: 30 });
+    const page = await open(`${server.url}www/?workers=1`);
+    await waitState(page, "ready");
+    await pause(page);
+    await predict(page);
+    const starts = () => page.evaluate(() => window.dmbnEvents.filter((e) => e.type === "start").length);
+    const started = await starts();
+    const done = await predictions(page);
+    await openFolder(page, dir);
+    const options = await page.evaluate(() => [...document.querySelectorAll("#sequence option")].map((o) => o.value));
+    assert.deepEqual(options, ["sim", "0/move", "1/move"]);
+    assert.equal(await page.inputValue("#sequence"), "0/move");
+    assert.match(await page.textContent("#object-info"), /^robot8\/0\/move: 12 steps read in \d+ ms \(frames at 64×64\)/);
+    // Neither data's models read 8 values: the page says so, naming both counts, and predicts
+    // nothing (a prediction had been made, so the new sequence would otherwise be predicted).
+    await waitState(page, "error");
+    const refusal = /reads 7 joint values a step, the folder's sequences have 8: choose a model trained on this robot/;
+    assert.match(await errorText(page), refusal);
+    assert.match(await page.textContent("#status"), /sequences have 8 joint values a step/);
+    // The panels are the sequence's: 8 of them, the legend in the ninth cell (3 rows of 4).
+    assert.equal(await page.getAttribute("#joints-plot", "data-panels"), "8");
+    assert.equal(await page.getAttribute("#joints-plot", "data-columns"), "4");
+    await shot(page, "folder-robot8");
+    // Predict, another model, the modes: each refused the same way, never asked of the workers.
+    const refused = async (action) => {
+      await action();
+      await page.evaluate(() => new Promise((ok) => requestAnimationFrame(() => setTimeout(ok, 50))));
+      await waitState(page, "error");
+      assert.match(await errorText(page), refusal);
+    };
+    await refused(() => page.click("#predict"));
+    await refused(() => page.selectOption("#model", "dmbn"));
+    assert.match(await errorText(page), /^The DMBN model reads 7/);
+    await refused(async () => {
+      await page.selectOption("#sequence", "1/move");
+      await page.waitForFunction(() => /\/1\/move:/.test(document.getElementById("object-info").textContent));
+    });
+    await refused(() => page.selectOption("#mode", "p"));
+    await refused(() => page.selectOption("#mode", "live"));
+    // Live mode plays on; however far it gets, nothing is forecast.
+    await page.waitForFunction(() => window.dmbnEvents.filter((e) => e.type === "step").slice(-1)[0]?.step >= 5);
+    await refused(() => page.click("#predict"));
+    assert.equal(await starts(), started, "no prediction was asked of the workers");
+    assert.equal(await predictions(page), done, "no prediction finished");
+    // Each refusal is logged once, however often it was asked again.
+    assert.ok(page.problems.length >= 1 && page.problems.every((p) => /reads 7 joint values a step/.test(p)), page.problems.join("\n"));
+    // The simulator is one choice away, and predicts again.
+    await page.selectOption("#mode", "t");
+    await page.selectOption("#sequence", "sim");
+    await page.waitForFunction(() => !document.getElementById("sim-controls").hidden);
+    await predict(page);
+    assert.equal(await page.locator("#error").isHidden(), true, await errorText(page));
+    assert.equal(await page.getAttribute("#joints-plot", "data-panels"), "7");
+    await close(page);
+  });
+
+  test("another robot's data with a model of its 8 joint values: chosen, predicted, forecast", async () => {
+    const dir = join(FOLDERS, "robot8-model");
+    writeRobotFolder(dir, { ids: [0, 1], action: "move", steps: 12, joints: 8, width: 40, height: 30 });
+    // No shipped model reads 8 values: DMBN-PTE widened (models.mjs) stands in for one, as
+    // the simulator's default model (a weight override); the page starts with DMBN (7).
+    const names = ["rail", "base", "shoulder", "elbow", "wrist 1", "wrist 2", "wrist 3", "gripper"];
+    virtualFiles["/test/robot8.dmbn"] = widenModel(readFileSync(join(ROOT, "assets", "models", "pte-sim.dmbn")), 8, names);
+    const page = await open(`${server.url}www/?workers=2&model=dmbn&attn=/test/robot8.dmbn`);
+    await waitState(page, "ready");
+    await pause(page);
+    await openFolder(page, dir);
+    // The 8-value model fits the folder: it is chosen.
+    await page.waitForFunction(() => document.getElementById("model").value === "attn");
+    await waitState(page, "ready");
+    assert.equal(await page.locator("#error").isHidden(), true, await errorText(page));
+    const info = await page.evaluate(() => window.dmbnTimings.models.attn);
+    assert.equal(info.jointCount, 8);
+    assert.deepEqual(info.jointNames, names);
+    assert.equal(await page.getAttribute("#joints-plot", "data-panels"), "8");
+    await pause(page);
+    await predict(page);
+    assert.equal(await page.evaluate(() => document.body.dataset.state), "predicted", await errorText(page));
+    await shot(page, "folder-robot8-model");
+    // Live mode forecasts, its error computed over 8 values a step.
+    const before = await predictions(page);
+    await page.selectOption("#mode", "live");
+    await page.waitForFunction((n) => Number(document.body.dataset.predictions) > n || document.body.dataset.state === "error", before);
+    assert.notEqual(await page.evaluate(() => document.body.dataset.state), "error", await errorText(page));
+    await page.waitForFunction(() => Number(document.getElementById("error-plot").dataset.points) > 0);
+    assert.deepEqual(page.problems, []);
+    // A 7-value model is refused.
+    await page.selectOption("#mode", "t");
+    await page.selectOption("#model", "dmbn");
+    await waitState(page, "error");
+    assert.match(await errorText(page), /^The DMBN model reads 7 joint values a step, the folder's sequences have 8/);
     await close(page);
   });
 

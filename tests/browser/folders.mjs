@@ -1,6 +1,7 @@
 // Small folders in the DMBN layout for the folder tests, written from the web package's own
 // simulator (so they need nothing but pkg/): frames as PNG, the text files as `dmbn simulate`
-// writes them, and broken variants of them.
+// writes them, and broken variants of them; and made-up data of another robot (more joint
+// values a step, frames of another size, no object or endpoint files).
 import { mkdirSync, rmSync, unlinkSync, writeFileSync } from "node:fs";
 import { dirname, join } from "node:path";
 import { deflateSync } from "node:zlib";
@@ -16,8 +17,8 @@ const crc32 = (bytes) => {
   return (c ^ 0xffffffff) >>> 0;
 };
 
-/** An RGB8 PNG of `size`×`size` pixels (no filtering). */
-export function png(rgb, size) {
+/** An RGB8 PNG of `size`×`height` pixels (square by default; no filtering). */
+export function png(rgb, size, height = size) {
   const chunk = (type, data) => {
     const out = Buffer.alloc(12 + data.length);
     out.writeUInt32BE(data.length, 0);
@@ -28,10 +29,10 @@ export function png(rgb, size) {
   };
   const header = Buffer.alloc(13);
   header.writeUInt32BE(size, 0);
-  header.writeUInt32BE(size, 4);
+  header.writeUInt32BE(height, 4);
   header.set([8, 2, 0, 0, 0], 8);
-  const raw = Buffer.alloc(size * (size * 3 + 1));
-  for (let y = 0; y < size; y++) Buffer.from(rgb.buffer, rgb.byteOffset + y * size * 3, size * 3).copy(raw, y * (size * 3 + 1) + 1);
+  const raw = Buffer.alloc(height * (size * 3 + 1));
+  for (let y = 0; y < height; y++) Buffer.from(rgb.buffer, rgb.byteOffset + y * size * 3, size * 3).copy(raw, y * (size * 3 + 1) + 1);
   return Buffer.concat([Buffer.from([137, 80, 78, 71, 13, 10, 26, 10]), chunk("IHDR", header), chunk("IDAT", deflateSync(raw)), chunk("IEND", Buffer.alloc(0))]);
 }
 
@@ -45,7 +46,7 @@ const table = (values, width) =>
  * The files of the episodes `[{action, seed}]` of the wasm package `wasm` at `size` px as
  * sequences 0, 1, … of a folder named `root`: `{files: {path: bytes}, digests: {"id/action": digest}}`.
  */
-export function folderFiles(wasm, root, episodes, size = 64) {
+export function folderFiles(wasm, root, episodes, size = 64, { object = true } = {}) {
   const files = {};
   const digests = {};
   const text = (s) => Buffer.from(s);
@@ -56,26 +57,67 @@ export function folderFiles(wasm, root, episodes, size = 64) {
     const px = size * size * 3;
     for (let k = 0; k < ep.len; k++) files[`${dir}/${k}.png`] = png(frames.subarray(k * px, (k + 1) * px), size);
     files[`${dir}/joint_${id}.txt`] = text(table(ep.joints(), 7));
-    files[`${dir}/object_${id}.txt`] = text(table(ep.object(), 3));
-    files[`${dir}/endpoint_${id}.txt`] = text(table(ep.endpoint(), 7));
+    if (object) {
+      files[`${dir}/object_${id}.txt`] = text(table(ep.object(), 3));
+      files[`${dir}/endpoint_${id}.txt`] = text(table(ep.endpoint(), 7));
+    }
     digests[`${id}/${action}`] = ep.digest();
     ep.free();
   });
   return { files, digests };
 }
 
-/**
- * Writes the episodes `[{action, seed}]` of the wasm package `wasm` at `size` px as sequences
- * 0, 1, … of a folder at `root` (replaced); returns their digests by "id/action".
- */
-export function writeFolder(wasm, root, episodes, size = 64) {
+/** Writes `files` ({path: bytes}, relative) into a folder at `root` (replaced). */
+function writeFiles(root, files) {
   rmSync(root, { recursive: true, force: true });
-  const { files, digests } = folderFiles(wasm, ".", episodes, size);
   for (const [path, bytes] of Object.entries(files)) {
     mkdirSync(dirname(join(root, path)), { recursive: true });
     writeFileSync(join(root, path), bytes);
   }
+}
+
+/**
+ * Writes the episodes `[{action, seed}]` of the wasm package `wasm` at `size` px as sequences
+ * 0, 1, … of a folder at `root` (replaced); returns their digests by "id/action". `object:
+ * false` leaves out the object and endpoint files (data that has none).
+ */
+export function writeFolder(wasm, root, episodes, size = 64, { object = true } = {}) {
+  const { files, digests } = folderFiles(wasm, ".", episodes, size, { object });
+  writeFiles(root, files);
   return digests;
+}
+
+/**
+ * Writes a folder at `root` (replaced) of another robot's data, made up: sequences `ids` of
+ * `action`, `steps` steps each, `joints` joint values a step (smooth curves, the last one a
+ * gripper opening and closing) and `width`×`height` PNG frames (a gradient that moves), no
+ * object or endpoint files.
+ */
+export function writeRobotFolder(root, { ids = [0, 1], action = "move", steps = 12, joints = 8, width = 40, height = 30 } = {}) {
+  const files = {};
+  for (const id of ids) {
+    const dir = `${id}/${action}`;
+    const rows = [];
+    for (let k = 0; k < steps; k++) {
+      const phase = k / (steps - 1);
+      const row = Array.from({ length: joints }, (_, j) =>
+        j + 1 === joints ? (phase < 0.5 ? 0.04 : 0) : 0.5 * Math.sin(2 * Math.PI * phase + j + id) + 0.1 * j,
+      );
+      rows.push(row.map((v) => v.toFixed(5)).join(" ") + "\n");
+      const rgb = new Uint8Array(width * height * 3);
+      for (let y = 0; y < height; y++) {
+        for (let x = 0; x < width; x++) {
+          const i = (y * width + x) * 3;
+          rgb[i] = (x * 255) / (width - 1);
+          rgb[i + 1] = (y * 255) / (height - 1);
+          rgb[i + 2] = Math.abs(x - phase * (width - 1)) < 4 ? 255 : 40 * id;
+        }
+      }
+      files[`${dir}/${k}.png`] = png(rgb, width, height);
+    }
+    files[`${dir}/joint_${id}.txt`] = Buffer.from(rows.join(""));
+  }
+  writeFiles(root, files);
 }
 
 /**

@@ -31,9 +31,13 @@ pub struct Sample {
 }
 
 impl Sample {
-    pub fn of(trajectory: &[[f32; 7]], outcome: &Outcome, digest: &str) -> Sample {
+    pub fn of(trajectory: &[impl AsRef<[f32]>], outcome: &Outcome, digest: &str) -> Sample {
         Sample {
-            trajectory: trajectory.as_flattened().to_vec(),
+            trajectory: trajectory
+                .iter()
+                .flat_map(|r| r.as_ref())
+                .copied()
+                .collect(),
             success: outcome.success,
             lift_cm: outcome.lift_cm,
             object_error_cm: outcome.object_error_cm,

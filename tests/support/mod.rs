@@ -254,3 +254,12 @@ pub fn two_sigma_misses(
     }
     misses
 }
+
+/// The rows of `joints` as fixed `[f32; JOINTS]` arrays (the simulator's arm, trajectories):
+/// panics unless the table is `JOINTS` values wide.
+pub fn fixed_rows(joints: &dmbn::data::Joints) -> Vec<[f32; dmbn::data::JOINTS]> {
+    joints
+        .rows()
+        .map(|r| r.try_into().expect("JOINTS values a row"))
+        .collect()
+}

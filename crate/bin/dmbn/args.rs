@@ -4,7 +4,7 @@ use std::path::{Path, PathBuf};
 
 use clap::Args;
 
-use dmbn::data::{Dataset, Sequence, SequenceRef};
+use dmbn::data::{Dataset, Disk, Sequence, SequenceRef};
 use dmbn::predict::Predictor;
 
 use crate::error::CliError;
@@ -53,6 +53,29 @@ pub fn sequences_in<'a>(
     Ok(refs)
 }
 
+/// The dataset at `data`, its `camera`'s frames (`--camera`; the default camera without),
+/// refused with both counts unless its sequences have as many joint values a step as each of
+/// `models` (path, predictor) reads.
+pub fn open_for(
+    data: &Path,
+    camera: Option<&str>,
+    models: &[(&Path, &Predictor)],
+) -> Result<Dataset, CliError> {
+    let dataset = Dataset::open(data)?.with_camera(&Disk, camera)?;
+    let (width, _) = dataset.joint_width(&Disk)?;
+    for (path, predictor) in models {
+        if predictor.joint_count() != width {
+            return Err(CliError::Usage(format!(
+                "{}: the model reads {} joint values a step, but the data at {} has {width}: use a model trained on this robot's data",
+                path.display(),
+                predictor.joint_count(),
+                data.display()
+            )));
+        }
+    }
+    Ok(dataset)
+}
+
 /// A sequence as `ID/ACTION` (`--sequence`).
 pub fn parse_sequence(s: &str) -> Result<(u32, String), String> {
     let bad = || format!("{s:?} is not ID/ACTION: expected e.g. 3/grasp");
@@ -86,13 +109,18 @@ pub struct ModelAndSequence {
     /// Sequence, as ID/ACTION (e.g. 38/grasp).
     #[arg(long, value_parser = parse_sequence)]
     pub sequence: (u32, String),
+    /// Camera whose frames the model sees: a sub-folder of that name in each sequence folder
+    /// (default: the frames in the sequence folder itself).
+    #[arg(long)]
+    pub camera: Option<String>,
 }
 
 impl ModelAndSequence {
     /// The model and the sequence, read at the model's frame size.
     pub fn load(&self) -> Result<(Predictor, Sequence), CliError> {
         let predictor = Predictor::load(&self.model)?;
-        let dataset = Dataset::open(&self.data)?;
+        let models = [(self.model.as_path(), &predictor)];
+        let dataset = open_for(&self.data, self.camera.as_deref(), &models)?;
         let size = predictor.model().image_size() as u32;
         let (id, action) = &self.sequence;
         let seq = dataset.read(dataset.find(*id, action)?, Some(size))?;

@@ -4,12 +4,11 @@ use std::path::PathBuf;
 
 use clap::Args;
 
-use dmbn::data::Dataset;
 use dmbn::model::{with_joint_sigma_scale, JointSigmaScale};
 use dmbn::predict::Predictor;
 use dmbn::quality::{joint_z_scores, two_sigma_scale, JointZScores, Scenario, TWO_SIGMA};
 
-use crate::args::{parse_blend, parse_ids, sequences_in};
+use crate::args::{open_for, parse_blend, parse_ids, sequences_in};
 use crate::error::CliError;
 use crate::output::{progress, write};
 
@@ -21,6 +20,10 @@ pub struct CalibrateArgs {
     /// Dataset root in the DMBN layout.
     #[arg(long)]
     data: PathBuf,
+    /// Camera whose frames the models see: a sub-folder of that name in each sequence folder
+    /// (default: the frames in the sequence folder itself).
+    #[arg(long)]
+    camera: Option<String>,
     /// Sequence ids to fit on, A-B inclusive: ids the model never trained on (its validation
     /// ids), not the ones it will be judged on.
     #[arg(long, value_parser = parse_ids)]
@@ -53,7 +56,8 @@ pub fn run(args: CalibrateArgs) -> Result<(), CliError> {
         path: args.model.clone(),
         source,
     })?;
-    let dataset = Dataset::open(&args.data)?;
+    let models = [(args.model.as_path(), &predictor)];
+    let dataset = open_for(&args.data, args.camera.as_deref(), &models)?;
     let (a, b) = args.ids;
     let refs = sequences_in(&dataset, &args.data, Some(args.ids))?;
     let size = predictor.model().image_size() as u32;

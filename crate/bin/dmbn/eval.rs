@@ -75,7 +75,12 @@ pub fn run(args: EvalArgs) -> Result<(), CliError> {
     create_dir(&args.out)?;
     save_png(
         &args.out.join("figure.png"),
-        &eval_figure(&evaluation, 8, 2)?,
+        &eval_figure(
+            &evaluation,
+            &predictor.model().config().joint_labels(),
+            8,
+            2,
+        )?,
     )?;
     let report = EvalReport {
         model: predictor.model().kind().to_string(),

@@ -7,13 +7,13 @@ use std::path::PathBuf;
 use clap::{Args, ValueEnum};
 use serde::Serialize;
 
-use dmbn::data::{Dataset, Sequence, SequenceRef};
+use dmbn::data::{Dataset, Disk, Sequence, SequenceRef};
 use dmbn::imitate::{
     imitate, mean_motion, replay, with_noise, ImitateError, ImitationReport, OutcomeSums, Task,
 };
 use dmbn::predict::Predictor;
 use dmbn::quality::MeanMotion;
-use dmbn::sim::{Action, Outcome};
+use dmbn::sim::{Action, Arm, Outcome};
 
 use crate::args::{in_ids, parse_blend, parse_ids, sequences_in};
 use crate::error::CliError;
@@ -100,6 +100,16 @@ pub fn run(args: ImitateArgs) -> Result<(), CliError> {
         .map(|path| Ok((model_name(path), Predictor::load(path)?)))
         .collect::<Result<Vec<_>, CliError>>()?;
     let dataset = Dataset::open(&args.data)?;
+    let (width, _) = dataset.joint_width(&Disk)?;
+    if Arm::of_width(width).is_err() {
+        return Err(CliError::Usage(format!(
+            "{}: {width} joint values a step: imitate performs one of the simulator's arms ({} \
+             values: the angles, then the gripper) with the object where the demonstration had \
+             it, so it needs the simulator's data (`dmbn simulate`) and a model trained on it",
+            args.data.display(),
+            Arm::widths_text()
+        )));
+    }
     let imitated = sequences_in(&dataset, &args.data, args.ids)?;
     let read = |refs: &[&SequenceRef], size: usize| {
         refs.iter()

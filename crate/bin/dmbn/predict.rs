@@ -6,7 +6,7 @@ use clap::Args;
 use image::RgbImage;
 use serde::Serialize;
 
-use dmbn::data::{Sequence, JOINTS};
+use dmbn::data::Sequence;
 use dmbn::figure::{joint_plot, save_png, JointPlot};
 use dmbn::predict::{prediction_arrays, Observations, Scores, SequencePrediction};
 
@@ -57,7 +57,8 @@ pub fn run(args: PredictArgs) -> Result<(), CliError> {
     )
     .ok_or_else(|| CliError::Usage("prediction and sequence lengths differ".into()))?;
 
-    write_figures(&args, &seq, &prediction)?;
+    let names = predictor.model().config().joint_labels();
+    write_figures(&args, &seq, &prediction, &names)?;
     let report = Report {
         model: predictor.model().kind().to_string(),
         sequence: format!("{id}/{action}"),
@@ -90,6 +91,7 @@ fn write_figures(
     args: &PredictArgs,
     seq: &Sequence,
     prediction: &SequencePrediction,
+    names: &[String],
 ) -> Result<(), CliError> {
     let s = prediction.image_size as u32;
     for dir in ["mean", "sigma", "truth"] {
@@ -115,10 +117,10 @@ fn write_figures(
         )?;
     }
     let times = seq.times();
-    let observed: Vec<(f32, [f32; JOINTS])> = args
+    let observed: Vec<(f32, Vec<f32>)> = args
         .observe
         .iter()
-        .map(|&k| (times[k], seq.joints[k]))
+        .map(|&k| (times[k], seq.joints[k].to_vec()))
         .collect();
     let plot = JointPlot {
         times: &times,
@@ -126,7 +128,7 @@ fn write_figures(
         mean: &prediction.joint_mean,
         sigma: &prediction.joint_sigma,
         observed: &observed,
-        names: JointPlot::NAMES,
+        names,
     };
     save_png(&args.out.join("joints.png"), &joint_plot(&plot, 900, 900)?)?;
     Ok(())

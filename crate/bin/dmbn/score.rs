@@ -5,12 +5,12 @@ use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
 
-use dmbn::data::{Dataset, Sequence};
+use dmbn::data::Sequence;
 use dmbn::figure::{calibration_plot, save_png};
 use dmbn::predict::Predictor;
 use dmbn::quality::{score_sequence, Accumulator, MeanMotion, QualityReport, QualityRow, Scenario};
 
-use crate::args::{in_ids, parse_blend, parse_ids, sequences_in};
+use crate::args::{in_ids, open_for, parse_blend, parse_ids, sequences_in};
 use crate::error::CliError;
 use crate::output::{model_name, progress, write_json};
 
@@ -32,6 +32,10 @@ pub struct ScoreArgs {
     /// Dataset root in the DMBN layout.
     #[arg(long)]
     data: PathBuf,
+    /// Camera whose frames the models see: a sub-folder of that name in each sequence folder
+    /// (default: the frames in the sequence folder itself).
+    #[arg(long)]
+    camera: Option<String>,
     /// Sequence ids to score, A-B inclusive (default: every id). Use ids the models never
     /// trained on.
     #[arg(long, value_parser = parse_ids)]
@@ -65,7 +69,8 @@ pub fn run(args: ScoreArgs) -> Result<(), CliError> {
         .iter()
         .map(|path| Ok((path, Predictor::load(path)?)))
         .collect::<Result<Vec<_>, CliError>>()?;
-    let dataset = Dataset::open(&args.data)?;
+    let models: Vec<_> = predictors.iter().map(|(p, m)| (p.as_path(), m)).collect();
+    let dataset = open_for(&args.data, args.camera.as_deref(), &models)?;
     let refs = sequences_in(&dataset, &args.data, args.ids)?;
     let scenarios: Vec<Scenario> = match args.scenario {
         ScenarioArg::Interp => vec![Scenario::Interp],

@@ -5,7 +5,7 @@ use std::thread;
 use clap::Args;
 
 use dmbn::data::{image_sizes_text, IMAGE_SIZES};
-use dmbn::sim::{self, Action};
+use dmbn::sim::{self, Action, Arm};
 
 use crate::error::CliError;
 use crate::output::progress;
@@ -24,6 +24,9 @@ pub struct SimulateArgs {
     /// Frame size in pixels.
     #[arg(long, default_value_t = 64, value_parser = parse_image_size)]
     image_size: u32,
+    /// The arm: ur5 (6 joints, 7 values a step) or panda (7 joints, 8 values a step).
+    #[arg(long, default_value = "ur5")]
+    arm: Arm,
     /// Actions to record, comma separated.
     #[arg(long, value_delimiter = ',', default_value = "grasp,move")]
     actions: Vec<Action>,
@@ -56,11 +59,11 @@ pub fn run(args: SimulateArgs) -> Result<(), CliError> {
         |j| j as usize,
     );
     let bar = progress(0, "simulate");
-    let result = sim::generate(
+    let result = sim::generate_with_arm(
         &args.out,
         0..sequences,
         seed,
-        &actions,
+        (args.arm, &actions),
         image_size,
         jobs,
         |done, total| {
@@ -72,9 +75,10 @@ pub fn run(args: SimulateArgs) -> Result<(), CliError> {
     let out = result?;
     let names: Vec<&str> = actions.iter().map(|a| a.name()).collect();
     println!(
-        "wrote {} sequences ({sequences} per action: {}; seeds {seed}..={}; {image_size}x{image_size} frames) to {}",
+        "wrote {} sequences ({sequences} per action: {}; {} arm; seeds {seed}..={}; {image_size}x{image_size} frames) to {}",
         sequences as usize * actions.len(),
         names.join(", "),
+        args.arm,
         seed.wrapping_add(u64::from(sequences - 1)),
         out.display()
     );

@@ -192,6 +192,11 @@ struct Args {
         conflicts_with = "resume"
     )]
     joint_scale: JointScaleArg,
+    /// Camera whose frames the model sees: a sub-folder of that name in each sequence folder
+    /// (see docs/architecture.md, the DMBN layout); default: the frames in the sequence folder
+    /// itself. One camera a model. A resumed run keeps its run's.
+    #[arg(long, conflicts_with = "resume")]
+    camera: Option<String>,
     /// Continue the run in --out from its last checkpoint (same settings).
     #[arg(long)]
     resume: bool,
@@ -397,6 +402,7 @@ fn run(args: Args) -> Result<(), TrainError> {
             JointScaleArg::PerJoint => JointScale::PerJoint,
             JointScaleArg::Shared => JointScale::Shared,
         };
+        config.camera = args.camera.clone();
         Trainer::new_on(&args.devices, data, &args.out, config)?
     };
     let steps = trainer.config().steps;
@@ -436,8 +442,9 @@ fn run(args: Args) -> Result<(), TrainError> {
         let data = trainer
             .data()
             .ok_or_else(|| TrainError::config("data", "missing: pass --data"))?;
-        let split = Split::open(data, trainer.config().val_fraction)?;
-        fit_mirror_stage(&args, &split, &path)?;
+        let config = trainer.config();
+        let split = Split::open_camera(data, config.val_fraction, config.camera.as_deref())?;
+        fit_mirror_stage(&args, &split, config.camera.as_deref(), &path)?;
     }
     println!("wrote {}", path.display());
     if let Some((step, score)) = trainer.best_quality() {
@@ -461,7 +468,7 @@ fn mirror_only(args: &Args) -> Result<(), TrainError> {
     let Some(data) = args.data.as_deref() else {
         return Err(TrainError::config("data", "missing: pass --data"));
     };
-    let split = Split::open(data, args.val_fraction)?;
+    let split = Split::open_camera(data, args.val_fraction, args.camera.as_deref())?;
     let bytes = std::fs::read(init).map_err(|e| TrainError::Io {
         path: init.to_path_buf(),
         message: e.to_string(),
@@ -472,7 +479,7 @@ fn mirror_only(args: &Args) -> Result<(), TrainError> {
     })?;
     let path = args.out.join("model.dmbn");
     write_atomic(&path, &bytes)?;
-    fit_mirror_stage(args, &split, &path)?;
+    fit_mirror_stage(args, &split, args.camera.as_deref(), &path)?;
     println!("wrote {}", path.display());
     Ok(())
 }
@@ -490,7 +497,12 @@ fn mirror_fit(args: &Args) -> MirrorFit {
 
 /// `--mirror`: the mirror stage fitted to the model file at `path` (rewritten with it), on
 /// the CPU.
-fn fit_mirror_stage(args: &Args, split: &Split, path: &std::path::Path) -> Result<(), TrainError> {
+fn fit_mirror_stage(
+    args: &Args,
+    split: &Split,
+    camera: Option<&str>,
+    path: &std::path::Path,
+) -> Result<(), TrainError> {
     let fit = mirror_fit(args);
     eprintln!(
         "fitting the mirror stage: {} training and {} validation sequences, {} layouts each",
@@ -515,6 +527,7 @@ fn fit_mirror_stage(args: &Args, split: &Split, path: &std::path::Path) -> Resul
         path,
         &split.train,
         val,
+        camera,
         fit,
         &burn::tensor::Device::flex().autodiff(),
         |stage| match stage {

@@ -48,7 +48,7 @@ pub fn encode_steps(
     };
     for chunk in steps.chunks(ENCODE_CHUNK) {
         let b = chunk.len();
-        let mut batch = Batch::contexts_only(b, 1, 1, s);
+        let mut batch = Batch::contexts_only(b, 1, 1, s, normalization.width());
         batch.blend.fill(0.5);
         for (i, &(seq, k, t)) in chunk.iter().enumerate() {
             let time = if zero_time { 0.0 } else { t };
@@ -56,7 +56,7 @@ pub fn encode_steps(
                 i,
                 0,
                 seq.frame(k),
-                normalization.normalize(&seq.joints[k]),
+                &normalization.normalize(&seq.joints[k]),
                 time,
             );
             out.times.push(t);

@@ -1,0 +1,161 @@
+//! The dataset converters (python/dmbn_convert: LeRobot v2.x/v3.0 and robomimic HDF5 into the
+//! DMBN layout, and the DMBN layout back to LeRobot v2.1): their pytest suite, run with a
+//! Python that has pyarrow, av, h5py and pytest (`.ci/setup` makes one); skipped without.
+#![cfg(not(target_arch = "wasm32"))]
+
+mod support;
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// `$DMBN_PYTHON_CONVERT`, the converters' venv (`~/.cache/dmbn/venv-convert`), or
+/// `python3`: the first that imports the converters' dependencies.
+fn python_with_converter_deps() -> Option<PathBuf> {
+    let venv = std::env::var_os("HOME")
+        .map(|h| PathBuf::from(h).join(".cache/dmbn/venv-convert/bin/python"));
+    let candidates = std::env::var_os("DMBN_PYTHON_CONVERT")
+        .map(PathBuf::from)
+        .into_iter()
+        .chain(venv)
+        .chain([PathBuf::from("python3")]);
+    for python in candidates {
+        let ok = Command::new(&python)
+            .args(["-c", "import pyarrow, av, h5py, pytest"])
+            .output()
+            .is_ok_and(|o| o.status.success());
+        if ok {
+            return Some(python);
+        }
+    }
+    None
+}
+
+#[test]
+fn converters_pass_their_pytest_suite() {
+    let Some(python) = python_with_converter_deps() else {
+        support::skip(
+            "no Python with pyarrow, av, h5py and pytest (set DMBN_PYTHON_CONVERT, or run \
+             pip install -r python/requirements-convert.txt)",
+        );
+        return;
+    };
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let output = Command::new(&python)
+        .args([
+            "-m",
+            "pytest",
+            "-q",
+            "-p",
+            "no:cacheprovider",
+            "python/tests/test_convert.py",
+        ])
+        .current_dir(root)
+        .env("PYTHONDONTWRITEBYTECODE", "1")
+        .output()
+        .expect("runs pytest");
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    println!("{stdout}");
+    assert!(
+        output.status.success(),
+        "{} -m pytest python/tests/test_convert.py failed ({}):\n{stdout}\n{stderr}",
+        python.display(),
+        output.status
+    );
+}
+
+/// A LeRobot v2.1 dataset and a robomimic file, written by the suite's fixtures (the formats'
+/// own libraries), converted, then trained on and scored by the usual commands: other robots'
+/// data (8 and 9 joint values a step, 48 × 32 frames, no object files) from end to end.
+#[test]
+fn converted_datasets_train_and_score() {
+    let Some(python) = python_with_converter_deps() else {
+        support::skip("no Python with pyarrow, av, h5py and pytest (see the test above)");
+        return;
+    };
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let tmp = tempfile::tempdir().unwrap();
+    let t = tmp.path();
+    let script = r#"
+import json, sys
+from pathlib import Path
+import h5py, numpy as np
+sys.path.insert(0, "python/tests")
+import test_convert as t
+out = Path(sys.argv[1])
+t.write_v21(out / "lerobot")
+with h5py.File(out / "lift.hdf5", "w") as f:
+    data = f.create_group("data")
+    data.attrs["env_args"] = json.dumps({"env_name": "Lift"})
+    for name, n in {"demo_0": 9, "demo_1": 8, "demo_2": 10}.items():
+        obs = data.create_group(f"{name}/obs")
+        for key, value in t.robomimic_arrays(name, n).items():
+            obs.create_dataset(key, data=value)
+code = t.main(["lerobot", str(out / "lerobot"), str(out / "from-lerobot"), "--action", "pick"])
+code |= t.main(["robomimic", str(out / "lift.hdf5"), str(out / "from-robomimic"), "--action", "lift"])
+sys.exit(code)
+"#;
+    let made = Command::new(&python)
+        .args(["-c", script, t.to_str().unwrap()])
+        .current_dir(root)
+        .env("PYTHONDONTWRITEBYTECODE", "1")
+        .output()
+        .unwrap();
+    assert!(
+        made.status.success(),
+        "{}",
+        String::from_utf8_lossy(&made.stderr)
+    );
+    for (name, joints) in [("from-lerobot", 8), ("from-robomimic", 9)] {
+        let data = t.join(name);
+        let run = t.join(format!("run-{name}"));
+        let said = |o: &std::process::Output| {
+            format!(
+                "{name}: {}{}",
+                String::from_utf8_lossy(&o.stdout),
+                String::from_utf8_lossy(&o.stderr)
+            )
+        };
+        let train = Command::new(env!("CARGO_BIN_EXE_train"))
+            .args([
+                "--data",
+                data.to_str().unwrap(),
+                "--out",
+                run.to_str().unwrap(),
+            ])
+            .args([
+                "--model",
+                "pte",
+                "--steps",
+                "2",
+                "--batch",
+                "2",
+                "--val-every",
+                "2",
+            ])
+            .args(["--val-fraction", "0.34", "--quality-sequences", "0"])
+            .output()
+            .unwrap();
+        assert!(train.status.success(), "{}", said(&train));
+        let model = run.join("model.dmbn");
+        let header = dmbn::model::read_header(&std::fs::read(&model).unwrap()).unwrap();
+        assert_eq!(header.config.joint_count(), joints, "{name}");
+        assert!(
+            header.config.joint_names.is_some(),
+            "{name}: names from dataset.json"
+        );
+        let score = Command::new(env!("CARGO_BIN_EXE_dmbn"))
+            .args(["score", "--model", model.to_str().unwrap()])
+            .args([
+                "--data",
+                data.to_str().unwrap(),
+                "--ids",
+                "2-2",
+                "--observations",
+                "3",
+            ])
+            .output()
+            .unwrap();
+        assert!(score.status.success(), "{}", said(&score));
+    }
+}
