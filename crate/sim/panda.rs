@@ -2,7 +2,7 @@ use rapier3d::math::Vector;
 
 use super::chain::{v, Chain, FINGER_OPEN};
 use super::render::{Primitive, Shape};
-use super::scene::{prim, BLUE, DARK, GRAY, WHITE};
+use super::scene::{base_parts, capsule, cylinder, prim, DARK, GRAY, WHITE};
 use super::Arm;
 
 /// Franka Panda lengths (metres): shoulder height, upper arm, elbow offset, forearm, wrist
@@ -56,15 +56,9 @@ fn link_parts(i: usize) -> Vec<Primitive> {
     let p = |k: usize| v(PANDA.joint_points[k]);
     let x = Vector::X;
     let z = Vector::Z;
-    let cyl =
-        |a: Vector, b: Vector, radius: f32, color| prim(Shape::Cylinder { a, b, radius }, color);
-    let cap =
-        |a: Vector, b: Vector, radius: f32, color| prim(Shape::Capsule { a, b, radius }, color);
+    let (cyl, cap) = (cylinder, capsule);
     match i {
-        0 => vec![
-            cyl(Vector::ZERO, z * 0.055, 0.075, BLUE),
-            cyl(z * 0.055, z * 0.07, 0.062, DARK),
-        ],
+        0 => base_parts(),
         // Shoulder: upright column, housing on the pitch axis.
         1 => vec![
             cap(z * 0.07, p(1) - z * 0.03, 0.055, GRAY),

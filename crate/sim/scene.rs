@@ -332,6 +332,25 @@ pub(super) fn prim(shape: Shape, color: [f32; 3]) -> Primitive {
     Primitive { shape, color }
 }
 
+/// A cylinder from `a` to `b`: the arms' tubes and housings.
+pub(super) fn cylinder(a: Vector, b: Vector, radius: f32, color: [f32; 3]) -> Primitive {
+    prim(Shape::Cylinder { a, b, radius }, color)
+}
+
+/// A capsule from `a` to `b`.
+pub(super) fn capsule(a: Vector, b: Vector, radius: f32, color: [f32; 3]) -> Primitive {
+    prim(Shape::Capsule { a, b, radius }, color)
+}
+
+/// The base both arms stand on: a blue plinth and a dark ring.
+pub(super) fn base_parts() -> Vec<Primitive> {
+    let z = Vector::Z;
+    vec![
+        cylinder(Vector::ZERO, z * 0.055, 0.075, BLUE),
+        cylinder(z * 0.055, z * 0.07, 0.062, DARK),
+    ]
+}
+
 /// Move parts given in world coordinates at q = 0 into the frame of a body whose origin is `origin`.
 fn shift(parts: Vec<Primitive>, origin: Vector) -> Vec<Primitive> {
     let pose = rapier3d::math::Pose::from_translation(-origin);

@@ -2,7 +2,7 @@ use rapier3d::math::Vector;
 
 use super::chain::{v, Chain, FINGER_OPEN};
 use super::render::{Primitive, Shape};
-use super::scene::{prim, BLUE, DARK, GRAY, WHITE};
+use super::scene::{base_parts, capsule, cylinder, prim, BLUE, DARK, GRAY, WHITE};
 use super::Arm;
 
 /// UR5 Denavit-Hartenberg lengths (metres): shoulder height, upper arm, forearm, wrist offsets.
@@ -50,15 +50,9 @@ fn link_parts(i: usize) -> Vec<Primitive> {
     let p = |k: usize| v(UR5.joint_points[k]);
     let x = Vector::X;
     let z = Vector::Z;
-    let cyl =
-        |a: Vector, b: Vector, radius: f32, color| prim(Shape::Cylinder { a, b, radius }, color);
-    let cap =
-        |a: Vector, b: Vector, radius: f32, color| prim(Shape::Capsule { a, b, radius }, color);
+    let (cyl, cap) = (cylinder, capsule);
     match i {
-        0 => vec![
-            cyl(Vector::ZERO, z * 0.055, 0.075, BLUE),
-            cyl(z * 0.055, z * 0.07, 0.062, DARK),
-        ],
+        0 => base_parts(),
         // Shoulder: vertical housing, cap on the lift axis.
         1 => vec![
             cyl(z * 0.07, p(1) + z * 0.02, 0.06, DARK),

@@ -114,7 +114,13 @@ pub fn run(args: ImitateArgs) -> Result<(), CliError> {
     let read = |refs: &[&SequenceRef], size: usize| {
         refs.iter()
             .map(|r| {
-                let action: Action = r.action.parse()?;
+                let action: Action = r.action.parse().map_err(|e| {
+                    CliError::Usage(format!(
+                        "{}: {e}: imitate performs the simulator's scripted actions, so it \
+                         needs the simulator's data (`dmbn simulate`)",
+                        r.dir.display()
+                    ))
+                })?;
                 Ok((r.id, action, dataset.read(r, Some(size as u32))?))
             })
             .collect::<Result<Vec<(u32, Action, Sequence)>, CliError>>()
