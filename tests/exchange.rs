@@ -17,9 +17,14 @@ use dmbn::model::{
     JointSigmaScale, ModelError,
 };
 use dmbn::predict::{Observations, Predictor};
-use dmbn::sim::Action;
+use dmbn::sim::{Action, Arm};
 use safetensors::tensor::TensorView;
 use safetensors::{Dtype, SafeTensors};
+
+/// The simulator arm whose joint count the model file `bytes` reads.
+fn arm_of(bytes: &[u8]) -> Arm {
+    Arm::of_width(read_header(bytes).unwrap().config.joint_count()).unwrap()
+}
 
 /// Every shipped model file: what users export.
 fn shipped() -> Vec<PathBuf> {
@@ -34,7 +39,12 @@ fn shipped() -> Vec<PathBuf> {
 
 /// A simulated 64-px sequence and observations at a few of its steps.
 fn observations() -> (Observations, Vec<f32>) {
-    let episode = dmbn::sim::episode(Action::Grasp, 3, 64).unwrap();
+    observations_of(Arm::Ur5)
+}
+
+/// [`observations`] of `arm`'s episode: for a model of that arm's joint count.
+fn observations_of(arm: Arm) -> (Observations, Vec<f32>) {
+    let episode = dmbn::sim::episode_with_arm(arm, Action::Grasp, 3, 64).unwrap();
     let steps = [0, 9, 23, episode.len() - 1];
     (
         Observations::from_sequence(&episode, &steps).unwrap(),
@@ -44,9 +54,9 @@ fn observations() -> (Observations, Vec<f32>) {
 
 #[test]
 fn export_then_import_predicts_exactly_as_the_shipped_model() {
-    let (obs, times) = observations();
     for path in shipped() {
         let bytes = std::fs::read(&path).unwrap();
+        let (obs, times) = observations_of(arm_of(&bytes));
         let exported = export_safetensors(&bytes, false).unwrap();
         let imported = import_safetensors(&exported, false).unwrap();
         let header = read_header(&bytes).unwrap();
@@ -316,8 +326,10 @@ fn the_pytorch_twin_predicts_what_dmbn_predict_does() {
     };
     let dir = tempfile::tempdir().unwrap();
     let data = dir.path().join("data");
-    // Sequence 0 is the golden prediction's episode.
+    // Sequence 0 is the golden prediction's episode; the second arm's for its models.
     support::simulated_dataset(&data, [0], &[Action::Grasp], golden::SEED);
+    let panda_data = dir.path().join("panda");
+    support::simulated_arm_dataset(&panda_data, Arm::Panda, [0], &[Action::Grasp], golden::SEED);
     let observe = golden::OBSERVE.map(|k| k.to_string()).join(",");
     let dmbn = |args: &[&std::ffi::OsStr]| {
         let out = Command::new(env!("CARGO_BIN_EXE_dmbn"))
@@ -341,6 +353,10 @@ fn the_pytorch_twin_predicts_what_dmbn_predict_does() {
     std::fs::write(&calibrated, with_joint_sigma_scale(&bytes, scale).unwrap()).unwrap();
     for model in shipped().into_iter().chain([calibrated]) {
         let name = model.file_stem().unwrap().to_string_lossy().into_owned();
+        let data = match arm_of(&std::fs::read(&model).unwrap()) {
+            Arm::Ur5 => &data,
+            Arm::Panda => &panda_data,
+        };
         let st = dir.path().join(format!("{name}.safetensors"));
         dmbn(&[
             "export".as_ref(),

@@ -175,7 +175,7 @@ const NO_PARAMETERS = {
   Imitation: ["jointRmse", "observed", "outcome", "performance", "predictedFrom", "trajectory"],
   Model: ["imageSize", "jointCount", "jointNames", "kind", "normalization"],
   Prediction: ["imageMean", "imageSigma", "jointMean", "jointSigma", "len", "maxImageSigma", "meanFrame", "meanFrames", "pixelSigma", "sigmaMap"],
-  Simulator: ["endpoint", "frame", "imageSize", "joints", "len", "object", "run", "stepIndex", "step"],
+  Simulator: ["arm", "endpoint", "frame", "imageSize", "joints", "len", "object", "run", "stepIndex", "step"],
 };
 const FUNCTIONS_WITHOUT_PARAMETERS = ["placementRegion"];
 

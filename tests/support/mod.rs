@@ -95,10 +95,21 @@ pub fn simulated_dataset(
     actions: &[dmbn::sim::Action],
     seed: u64,
 ) {
+    simulated_arm_dataset(root, dmbn::sim::Arm::Ur5, ids, actions, seed)
+}
+
+/// [`simulated_dataset`] of `arm`'s episodes.
+pub fn simulated_arm_dataset(
+    root: &Path,
+    arm: dmbn::sim::Arm,
+    ids: impl IntoIterator<Item = u32>,
+    actions: &[dmbn::sim::Action],
+    seed: u64,
+) {
     let mut writer = dmbn::data::DatasetWriter::create(root).unwrap();
     for id in ids {
         for &action in actions {
-            let episode = dmbn::sim::episode(action, seed + id as u64, 64).unwrap();
+            let episode = dmbn::sim::episode_with_arm(arm, action, seed + id as u64, 64).unwrap();
             writer.write(id, action.name(), &episode).unwrap();
         }
     }
