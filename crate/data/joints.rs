@@ -63,6 +63,11 @@ impl Joints {
         &self.values[k * self.width..(k + 1) * self.width]
     }
 
+    /// The values of step `k`, to change.
+    pub fn row_mut(&mut self, k: usize) -> &mut [f32] {
+        &mut self.values[k * self.width..(k + 1) * self.width]
+    }
+
     /// Every step's values, in order.
     pub fn rows(&self) -> std::slice::ChunksExact<'_, f32> {
         self.values.chunks_exact(self.width.max(1))

@@ -40,19 +40,8 @@ pub fn read_sequence_from(
     let joints = read_joints(files, dir, id)?;
     let rows = joints.len();
     let present = files.files(dir)?;
-    let optional = |path: PathBuf| -> bool {
-        path.file_name()
-            .and_then(|n| n.to_str())
-            .is_some_and(|n| present.iter().any(|p| p == n))
-    };
-    let mut object = None;
-    if optional(object_path(dir, id)) {
-        object = Some(read_table::<3>(files, &object_path(dir, id))?);
-    }
-    let mut endpoint = None;
-    if optional(endpoint_path(dir, id)) {
-        endpoint = Some(read_table::<ENDPOINT>(files, &endpoint_path(dir, id))?);
-    }
+    let object = optional_table::<3>(files, &present, &object_path(dir, id))?;
+    let endpoint = optional_table::<ENDPOINT>(files, &present, &endpoint_path(dir, id))?;
     for (path, found) in [
         (object_path(dir, id), object.as_ref().map(Vec::len)),
         (endpoint_path(dir, id), endpoint.as_ref().map(Vec::len)),
@@ -161,6 +150,20 @@ fn load_frame(
         resize(&img, side)
     };
     Ok((stored, img.into_raw()))
+}
+
+/// [`read_table`] of the file at `path` when it is one of `present` (its folder's file names),
+/// `None` without it.
+fn optional_table<const N: usize>(
+    files: &impl Files,
+    present: &[String],
+    path: &Path,
+) -> Result<Option<Vec<[f32; N]>>, DataError> {
+    let name = path.file_name().and_then(|n| n.to_str());
+    if !name.is_some_and(|n| present.iter().any(|p| p == n)) {
+        return Ok(None);
+    }
+    read_table(files, path).map(Some)
 }
 
 /// Parse a whitespace-separated table of `N` finite numbers per row.

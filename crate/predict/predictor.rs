@@ -231,19 +231,15 @@ impl Predictor {
     ) -> Result<Joints, ModelError> {
         check_times(target_times)?;
         let encoding = self.encode(observations, blend)?;
-        let rows = self.network_joints(&encoding.representation, target_times)?;
-        let Some((mean, _)) = self.mirrored(&encoding, target_times) else {
-            return Ok(rows);
-        };
-        let mut out = Joints::with_width(rows.width());
-        for (k, &t) in target_times.iter().enumerate() {
-            out.push(if within_span(t, encoding.span) {
-                &mean[k]
-            } else {
-                &rows[k]
-            });
+        let mut rows = self.network_joints(&encoding.representation, target_times)?;
+        if let Some((mean, _)) = self.mirrored(&encoding, target_times) {
+            for (k, &t) in target_times.iter().enumerate() {
+                if within_span(t, encoding.span) {
+                    rows.row_mut(k).copy_from_slice(&mean[k]);
+                }
+            }
         }
-        Ok(out)
+        Ok(rows)
     }
 
     /// The joint means the network itself decodes at `target_times` from `representation`
