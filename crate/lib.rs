@@ -5,6 +5,7 @@ pub mod data;
 pub mod eval;
 #[cfg(not(target_arch = "wasm32"))]
 pub mod figure;
+pub mod futures;
 pub mod imitate;
 pub mod model;
 pub mod predict;

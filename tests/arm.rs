@@ -3,6 +3,8 @@
 //! `dmbn simulate --arm panda` writes its data; rows of a width no arm has are refused.
 use std::process::Command;
 
+mod golden;
+
 use dmbn::data::{read_joints, Disk};
 use dmbn::sim::{
     episode, episode_with_arm, perform, Action, Arm, Outcome, SimError, Simulator, Trajectory,
@@ -42,6 +44,16 @@ fn panda_episodes_have_eight_values_a_step_and_are_deterministic() {
         assert_eq!(a.digest(), d.digest());
         assert_eq!(a.joints[0][7], 0.0, "the gripper starts open");
     }
+}
+
+#[test]
+fn panda_episode_and_its_replay_match_the_golden_digests() {
+    // The wasm tests (tests/web.rs) check the same digests: native = wasm, bit for bit.
+    let demo = episode_with_arm(Arm::Panda, Action::Move, 7, 64).unwrap();
+    assert_eq!(demo.digest(), golden::GOLDEN_PANDA_MOVE_SEED7_64);
+    let t = Trajectory::of_joints(demo.joints.clone()).unwrap();
+    let replay = perform(&t, object(&demo), 64).unwrap();
+    assert_eq!(replay.digest(), golden::GOLDEN_PANDA_MOVE_SEED7_REPLAY);
 }
 
 #[test]

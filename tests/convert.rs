@@ -65,8 +65,9 @@ fn converters_pass_their_pytest_suite() {
 }
 
 /// A LeRobot v2.1 dataset and a robomimic file, written by the suite's fixtures (the formats'
-/// own libraries), converted, then trained on and scored by the usual commands: other robots'
-/// data (8 and 9 joint values a step, 48 × 32 frames, no object files) from end to end.
+/// own libraries) and converted by python/tests/converted.py, then trained on and scored by
+/// the usual commands: other robots' data (8 and 9 joint values a step, 48 × 32 frames, no
+/// object files) from end to end. (The page opens the same folders: folder.test.mjs.)
 #[test]
 fn converted_datasets_train_and_score() {
     let Some(python) = python_with_converter_deps() else {
@@ -76,27 +77,8 @@ fn converted_datasets_train_and_score() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let tmp = tempfile::tempdir().unwrap();
     let t = tmp.path();
-    let script = r#"
-import json, sys
-from pathlib import Path
-import h5py, numpy as np
-sys.path.insert(0, "python/tests")
-import test_convert as t
-out = Path(sys.argv[1])
-t.write_v21(out / "lerobot")
-with h5py.File(out / "lift.hdf5", "w") as f:
-    data = f.create_group("data")
-    data.attrs["env_args"] = json.dumps({"env_name": "Lift"})
-    for name, n in {"demo_0": 9, "demo_1": 8, "demo_2": 10}.items():
-        obs = data.create_group(f"{name}/obs")
-        for key, value in t.robomimic_arrays(name, n).items():
-            obs.create_dataset(key, data=value)
-code = t.main(["lerobot", str(out / "lerobot"), str(out / "from-lerobot"), "--action", "pick"])
-code |= t.main(["robomimic", str(out / "lift.hdf5"), str(out / "from-robomimic"), "--action", "lift"])
-sys.exit(code)
-"#;
     let made = Command::new(&python)
-        .args(["-c", script, t.to_str().unwrap()])
+        .args(["python/tests/converted.py", t.to_str().unwrap()])
         .current_dir(root)
         .env("PYTHONDONTWRITEBYTECODE", "1")
         .output()

@@ -11,8 +11,8 @@ mod golden_prediction;
 mod golden_score;
 
 use dmbn::web::{
-    enact, heat_map, perform, placement_region, replay, run_episode, Episode, Folder, ModelHandle,
-    Prediction, Simulator,
+    enact, heat_map, perform, perform_on_arm, placement_region, replay, run_episode, Episode,
+    Folder, ModelHandle, Prediction, Simulator,
 };
 use wasm_bindgen::{JsError, JsValue};
 use wasm_bindgen_test::wasm_bindgen_test;
@@ -59,6 +59,49 @@ fn grasp7() -> Episode {
 #[wasm_bindgen_test]
 fn digest_matches_native_golden() {
     assert_eq!(grasp7().digest(), golden::GOLDEN_GRASP_SEED7_64);
+}
+
+#[wasm_bindgen_test]
+fn the_second_arm_simulates_and_performs_as_natively() {
+    let panda = || Simulator::new_with_arm("move".into(), num(7.0), num(64.0), "panda".into());
+    let sim = panda().unwrap();
+    assert_eq!(sim.arm(), "panda");
+    let ep = sim.run();
+    assert_eq!(ep.joint_count(), 8);
+    assert_eq!(ep.digest(), golden::GOLDEN_PANDA_MOVE_SEED7_64);
+    let object = ep.object();
+    let (x, y) = (num(object[0].into()), num(object[1].into()));
+    let replay = perform_on_arm(
+        f32s(&ep.joints()),
+        x.clone(),
+        y.clone(),
+        num(64.0),
+        "panda".into(),
+    );
+    assert_eq!(
+        replay.unwrap().digest(),
+        golden::GOLDEN_PANDA_MOVE_SEED7_REPLAY
+    );
+    // Rows of the UR5's width are not the Panda's; an arm no one has is named.
+    let ur5 = grasp7().joints();
+    let err = message(
+        perform_on_arm(
+            f32s(&ur5[..14]),
+            x.clone(),
+            y.clone(),
+            num(64.0),
+            "panda".into(),
+        )
+        .err()
+        .unwrap(),
+    );
+    assert!(err.contains("rows of 8"), "{err}");
+    let err = message(
+        perform_on_arm(f32s(&ep.joints()), x, y, num(64.0), "kuka".into())
+            .err()
+            .unwrap(),
+    );
+    assert!(err.contains(r#""ur5" or "panda""#), "{err}");
 }
 
 #[wasm_bindgen_test]

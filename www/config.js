@@ -13,9 +13,10 @@ export const BLENDS = { images: 1, joints: 0, both: 0.5 };
 /**
  * The models the page offers, by id (the `#model` option values, the `model=` URL state, and
  * the key of the weights, loading and caching): the label, the kind the file must hold (what
- * `Model.kind` says), the shipped file and the data it was trained on (`sim`: the simulator;
- * `2020`: the original DMBN data, offered for an opened folder whose joints fit its
- * normalisation). The first of each data is its default: the best model.
+ * `Model.kind` says), the shipped file and the data it was trained on (`sim`: the simulator's UR5;
+ * `panda`: the simulator's Panda-like arm; `2020`: the original DMBN data, offered for an
+ * opened folder whose joints fit its normalisation). The first of each data is its default: the
+ * best model.
  */
 export const MODELS = {
   attn: { name: "Attentive (DMBN-PTE + attention)", kind: "attn", file: "attn-sim.dmbn", data: "sim" },
@@ -26,8 +27,11 @@ export const MODELS = {
   "pte-2020": { name: "DMBN-PTE · original data", kind: "pte", file: "pte-2020.dmbn", data: "2020" },
   "dmbn-2020": { name: "DMBN · original data", kind: "dmbn", file: "dmbn-2020.dmbn", data: "2020" },
   "pte-aug-2020": { name: "DMBN-PTE + time warps · original data", kind: "pte", file: "pte-aug-2020.dmbn", data: "2020" },
+  "attn-panda": { name: "Attentive · Panda arm", kind: "attn", file: "attn-panda.dmbn", data: "panda" },
 };
-/** The ids of the models trained on `data` ("sim" or "2020"), the default first. */
+/** The data of the simulator's `arm` (the Arm select's value): "sim" (the UR5's) or "panda". */
+export const armData = (arm) => (arm === "panda" ? "panda" : "sim");
+/** The ids of the models trained on `data` ("sim", "panda" or "2020"), the default first. */
 export const modelsOf = (data) => Object.keys(MODELS).filter((id) => MODELS[id].data === data);
 export const MODEL_NAMES = Object.fromEntries(Object.entries(MODELS).map(([id, m]) => [id, m.name]));
 /** What a model file holds (`Model.kind`), in words, for the mismatch note. */

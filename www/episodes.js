@@ -14,18 +14,21 @@ import { ui } from "./ui.js";
 import { writeUrl } from "./url.js";
 import { rgbImage } from "./views.js";
 
-/** Simulates an episode; `place` [x, y] puts the object there, otherwise the seed places it. */
+/**
+ * Simulates an episode of the chosen arm; `place` [x, y] puts the object there, otherwise the
+ * seed places it.
+ */
 export function generate(place = state.episode?.placed ? state.episode.object : null) {
-  const action = ui.action.value;
+  const { action, arm } = { action: ui.action.value, arm: ui.arm.value };
   const seed = Number(ui.seed.value === "" ? NaN : ui.seed.value);
   const t0 = performance.now();
   let ep;
   try {
     if (place) {
-      const sim = state.wasm.Simulator.withObject(action, place[0], place[1], seed, IMAGE_SIZE);
+      const sim = state.wasm.Simulator.withObject(action, place[0], place[1], seed, IMAGE_SIZE, arm);
       ep = sim.run();
     } else {
-      ep = state.wasm.runEpisode(action, seed, IMAGE_SIZE);
+      ep = state.wasm.runEpisode(action, seed, IMAGE_SIZE, arm);
     }
   } catch (err) {
     showError(err);

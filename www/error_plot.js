@@ -33,7 +33,7 @@ export function redrawErrors() {
 }
 
 /** A colour per model id (the page's MODELS). */
-export const MODEL_COLORS = { attn: "#4dabf7", dmbn: "#ff6b6b", pte: "#69db7c", "pte-aug": "#ffd43b", "attn-2020": "#4dabf7", "pte-2020": "#69db7c", "dmbn-2020": "#ff6b6b", "pte-aug-2020": "#ffd43b" };
+export const MODEL_COLORS = { attn: "#4dabf7", dmbn: "#ff6b6b", pte: "#69db7c", "pte-aug": "#ffd43b", "attn-2020": "#4dabf7", "pte-2020": "#69db7c", "dmbn-2020": "#ff6b6b", "pte-aug-2020": "#ffd43b", "attn-panda": "#4dabf7" };
 const PANELS = [
   { key: "jointRmse", title: "joint RMSE of the forecast (rad)" },
   { key: "imageMse", title: "image MSE of the forecast" },

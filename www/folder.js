@@ -4,7 +4,7 @@
 // Nothing is uploaded. The folder's sequences join the Sequence select.
 
 import { invalidate } from "./changes.js";
-import { IMAGE_SIZE, modelsOf } from "./config.js";
+import { armData, IMAGE_SIZE, modelsOf } from "./config.js";
 import { generate, setEpisode } from "./episodes.js";
 import { jointMismatch, loadModel, offerModels } from "./models.js";
 import { state } from "./state.js";
@@ -86,14 +86,14 @@ export async function readSequence(id, action) {
 
 /**
  * The data whose models fit the folder: among the data whose models read as many joint values
- * a step as the sequence has (D, `Episode.jointCount`), "2020" when the sequence's joints lie
- * nearer the joint normalisation of the models trained on the original DMBN data than of the
- * simulator's (the folder then holds the original data, or recordings like it), otherwise
- * "sim"; "none" when neither's do (another robot's data). Loads the default model of each (the
- * one chosen next anyway).
+ * a step as the sequence has (D, `Episode.jointCount`), the one whose models' joint
+ * normalisation the sequence's joints lie nearest ("2020" for the original data or recordings
+ * like it, "sim" for the simulator's UR5, "panda" for its Panda-like arm's 8 values); "none"
+ * when none's do (another robot's data). Loads the default model of each (the one chosen next
+ * anyway).
  */
 async function fittingData(episode) {
-  const defaults = await Promise.all(["sim", "2020"].map(async (data) => ({ data, info: await loadModel(modelsOf(data)[0]) })));
+  const defaults = await Promise.all(["sim", "2020", "panda"].map(async (data) => ({ data, info: await loadModel(modelsOf(data)[0]) })));
   if (state.episode !== episode) return null;
   // Episode.jointDistance takes a normalisation of D values only.
   const fitting = defaults.filter(({ info }) => info.jointCount === episode.jointCount);
@@ -102,12 +102,15 @@ async function fittingData(episode) {
   return fitting.reduce((best, d) => (distance(d) < distance(best) ? d : best)).data;
 }
 
-/** The Sequence select changed: the simulator (a new episode) or a sequence of the folder. */
+/**
+ * The Sequence select changed — the simulator (a new episode of the chosen arm, its models
+ * offered) or a sequence of the folder — or the Arm select did.
+ */
 export function sequenceChosen() {
   const value = ui.sequence.value;
   if (value === "sim") {
     if (!generate(null)) return;
-    if (offerModels("sim")) ui.model.dispatchEvent(new Event("change"));
+    if (offerModels(armData(ui.arm.value))) ui.model.dispatchEvent(new Event("change"));
     else invalidate();
     return;
   }

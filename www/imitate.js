@@ -5,7 +5,6 @@
 // judged in Rust against the demonstration — in a badge.
 
 import { performanceDone, performed, timings } from "./hooks.js";
-import { ARM_JOINTS } from "./plot.js";
 import { state } from "./state.js";
 import { showError } from "./status.js";
 import { ui } from "./ui.js";
@@ -16,14 +15,10 @@ const SEEN = { both: "frames and joints", images: "frames only", joints: "joints
 /**
  * Whether the arm can perform the episode on screen: a simulator episode, or a folder of
  * simulator data. The original DMBN data was recorded on a real arm whose joints the simulated
- * one does not share, and another robot's data has another number of joint values a step than
- * the arm's 7; its message otherwise.
+ * one does not share: its message otherwise. (Another robot's data, of a joint count no
+ * simulated arm has, is refused by `enact` itself, naming the counts the arms take.)
  */
 function performable() {
-  const count = state.episode?.jointCount;
-  if (state.episode?.folder && count !== ARM_JOINTS) {
-    return `The robot performs in the simulator, whose arm takes ${ARM_JOINTS} joint values a step, and this sequence has ${count}: imitate mode needs a simulator episode (the simulator, or a folder \`dmbn simulate\` wrote).`;
-  }
   if (state.episode?.folder && state.folder?.data === "2020") {
     return "The robot performs in the simulator, and this sequence is the original DMBN data, recorded on a real arm with other joints: imitate mode needs a simulator episode (the simulator, or a folder `dmbn simulate` wrote).";
   }
@@ -37,7 +32,7 @@ function performable() {
  */
 export function performImagined(p) {
   state.imagined = perform("imagined", () => {
-    const rows = p.jointMean.slice(0, p.len * ARM_JOINTS);
+    const rows = p.jointMean.slice(0, p.len * state.episode.jointCount);
     return state.wasm.enact(state.episode.handle, state.episode.action, rows, Uint32Array.from(p.steps));
   });
   if (state.imagined) state.imagined.observe = p.observe;

@@ -2,14 +2,14 @@
 // the first episode and the chosen model.
 
 import { observationsChanged } from "./changes.js";
-import { MODEL_NAMES, WORKERS } from "./config.js";
+import { armData, MODEL_NAMES, params, WORKERS } from "./config.js";
 import { generate } from "./episodes.js";
 import { on } from "./events.js";
 import { expose, started, timings } from "./hooks.js";
 import { clearPerformances, performImagined } from "./imitate.js";
 import { Inference } from "./inference.js";
 import { follow, forecastDone, takeRule } from "./live.js";
-import { jointMismatch, refuse, selectModel } from "./models.js";
+import { jointMismatch, offerModels, refuse, selectModel } from "./models.js";
 import { pause } from "./playback.js";
 import { predict, timePrediction } from "./prediction.js";
 import { state } from "./state.js";
@@ -33,6 +33,7 @@ async function main() {
   started();
   setState("loading");
   wire();
+  offerModels(armData(params.get("arm")));
   const place = readUrl();
   takeRule();
   ui.status.textContent = "Loading WebAssembly…";

@@ -8,6 +8,7 @@ export const ui = {
   dataset: $("dataset"),
   datasetInfo: $("dataset-info"),
   simControls: $("sim-controls"),
+  arm: $("arm"),
   action: $("action"),
   seed: $("seed"),
   random: $("random"),

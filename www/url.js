@@ -5,7 +5,10 @@ import { observedSteps } from "./observations.js";
 import { state } from "./state.js";
 import { ui } from "./ui.js";
 
-/** Sets the controls from the URL; returns the object placement [x, y] it names, or null. */
+/**
+ * Sets the controls from the URL (main.js offers the `arm=` arm's models first, so that
+ * `model=` can name one of them); returns the object placement [x, y] it names, or null.
+ */
 export function readUrl() {
   const set = (el, key) => {
     if (!params.has(key)) return;
@@ -13,6 +16,7 @@ export function readUrl() {
     if (el instanceof HTMLSelectElement && ![...el.options].some((o) => o.value === v)) return;
     el.value = v;
   };
+  set(ui.arm, "arm");
   set(ui.action, "action");
   set(ui.seed, "seed");
   set(ui.model, "model");
@@ -46,6 +50,7 @@ export function writeUrl() {
   if (!episode) return;
   const q = new URLSearchParams(location.search);
   const put = (key, value) => (value === null ? q.delete(key) : q.set(key, value));
+  put("arm", ui.arm.value === "ur5" ? null : ui.arm.value);
   put("action", ui.action.value);
   put("seed", ui.seed.value);
   put("x", episode.placed ? episode.object[0].toFixed(4) : null);

@@ -78,6 +78,7 @@ export function wire() {
     e.preventDefault();
     openFolder(await droppedFiles(e.dataTransfer.items));
   });
+  ui.arm.addEventListener("change", sequenceChosen);
   ui.action.addEventListener("change", () => generate() && invalidate());
   ui.seed.addEventListener("change", () => generate(null) && invalidate());
   ui.random.addEventListener("click", () => {

@@ -138,6 +138,7 @@ pub fn eval_figure(
         mean: &mean,
         sigma: &sigma,
         observed: &observed,
+        samples: &[],
         names,
     };
     let joints = joint_plot(&plot, width, (width * 2 / 3).max(500))?;

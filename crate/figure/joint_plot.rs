@@ -32,16 +32,22 @@ pub struct JointPlot<'a> {
     pub sigma: &'a [f32],
     /// Observed steps: (phase, D joint values).
     pub observed: &'a [(f32, Vec<f32>)],
+    /// Sampled futures (`dmbn sample`), each `T × D`: drawn as thin lines, a fan.
+    pub samples: &'a [Vec<f32>],
     /// Panel titles, one per joint value (a model's `ModelConfig::joint_labels`).
     pub names: &'a [String],
 }
 
 /// Draws `plot` as a `width × height` RGB image: a 4 × 2 grid of panels, each with the true
-/// curve (black), the predicted mean (blue) inside its ±2σ band (light blue) and the observed
-/// points (red).
+/// curve (black), the predicted mean (blue) inside its ±2σ band (light blue), the sampled
+/// futures (thin orange lines) and the observed points (red).
 pub fn joint_plot(plot: &JointPlot, width: u32, height: u32) -> Result<RgbImage, FigureError> {
     let (t, d) = (plot.times.len(), plot.names.len());
-    for (what, len) in [("mean", plot.mean.len()), ("sigma", plot.sigma.len())] {
+    let samples = plot.samples.iter().map(|s| ("samples", s.len()));
+    for (what, len) in [("mean", plot.mean.len()), ("sigma", plot.sigma.len())]
+        .into_iter()
+        .chain(samples)
+    {
         if d == 0 || len != t * d {
             return Err(FigureError::Input {
                 what,
@@ -97,6 +103,7 @@ pub(crate) fn rendered(
 fn draw(plot: &JointPlot, root: &Canvas) -> Result<(), Box<dyn std::error::Error>> {
     let band = RGBColor(160, 190, 235);
     let mean_colour = RGBColor(31, 90, 180);
+    let sample_colour = RGBColor(240, 140, 40);
     let x_end = plot.times.iter().copied().fold(1.0f32, f32::max);
     let d = plot.names.len();
     // Two panels a row, and one cell for the legend.
@@ -109,12 +116,14 @@ fn draw(plot: &JointPlot, root: &Canvas) -> Result<(), Box<dyn std::error::Error
             .truth
             .map_or_else(Vec::new, |rows| rows.rows().map(|r| r[j]).collect());
         let observed: Vec<(f32, f32)> = plot.observed.iter().map(|(t, r)| (*t, r[j])).collect();
+        let samples: Vec<Vec<f32>> = plot.samples.iter().map(|s| rows(s)).collect();
         let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
         let values = mean
             .iter()
             .zip(&sigma)
             .flat_map(|(m, s)| [m - 2.0 * s, m + 2.0 * s])
             .chain(truth.iter().copied())
+            .chain(samples.iter().flatten().copied())
             .chain(observed.iter().map(|o| o.1));
         for v in values.filter(|v| v.is_finite()) {
             lo = lo.min(v);
@@ -152,6 +161,12 @@ fn draw(plot: &JointPlot, root: &Canvas) -> Result<(), Box<dyn std::error::Error
                 .map(|(&t, (m, s))| (t, m - 2.0 * s)),
         );
         chart.draw_series(std::iter::once(Polygon::new(outline, band.filled())))?;
+        for sample in &samples {
+            chart.draw_series(LineSeries::new(
+                plot.times.iter().copied().zip(sample.iter().copied()),
+                sample_colour.stroke_width(1),
+            ))?;
+        }
         if !truth.is_empty() {
             chart.draw_series(LineSeries::new(
                 plot.times.iter().copied().zip(truth.iter().copied()),
@@ -164,15 +179,18 @@ fn draw(plot: &JointPlot, root: &Canvas) -> Result<(), Box<dyn std::error::Error
         ))?;
         chart.draw_series(observed.iter().map(|&p| Circle::new(p, 4, RED.filled())))?;
     }
+    let samples_drawn = !plot.samples.is_empty();
     if let Some(legend) = root.split_evenly(grid).get(d) {
         let style = ("sans-serif", 13).into_font();
         let lines = [
             ("true", BLACK),
             ("predicted mean", mean_colour),
             ("mean ± 2σ", band),
+            ("sampled futures", sample_colour),
             ("observed", RED),
         ];
-        for (i, (label, colour)) in lines.iter().enumerate() {
+        let shown = |(label, _): &&(&str, RGBColor)| *label != "sampled futures" || samples_drawn;
+        for (i, (label, colour)) in lines.iter().filter(shown).enumerate() {
             let y = 30 + 24 * i as i32;
             legend.draw(&Rectangle::new([(30, y - 6), (60, y + 6)], colour.filled()))?;
             legend.draw(&Text::new(*label, (70, y - 7), style.clone()))?;
@@ -199,6 +217,7 @@ mod tests {
             mean: &mean,
             sigma: &sigma,
             observed: &observed,
+            samples: &[],
             names: &names,
         };
         let image = joint_plot(&plot, 400, 300).unwrap();
@@ -212,6 +231,21 @@ mod tests {
             ..plot
         };
         assert!(joint_plot(&bad, 400, 300).is_err());
+        // Sampled futures: a fan of thin orange lines; one of the wrong length is refused.
+        let futures = [vec![0.3f32; 21], vec![-0.1f32; 21]];
+        let fan = JointPlot {
+            samples: &futures,
+            ..plot
+        };
+        let orange = |image: &RgbImage| image.pixels().any(|p| p.0 == [240, 140, 40]);
+        assert!(orange(&joint_plot(&fan, 400, 300).unwrap()));
+        assert!(!orange(&joint_plot(&plot, 400, 300).unwrap()));
+        let short = [vec![0.3f32; 20]];
+        let bad = JointPlot {
+            samples: &short,
+            ..plot
+        };
+        assert!(joint_plot(&bad, 400, 300).is_err());
         // Any number of joint values: three panels and the legend.
         let names: Vec<String> = ["a", "b", "c"].map(String::from).to_vec();
         let three = JointPlot {
@@ -220,6 +254,7 @@ mod tests {
             mean: &mean[..9],
             sigma: &sigma[..9],
             observed: &[],
+            samples: &[],
             names: &names,
         };
         assert_eq!(

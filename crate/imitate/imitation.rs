@@ -161,7 +161,7 @@ fn unobserved(
 
 /// Performs the demonstration's recorded rows before `steps.predicted_from`, then `rows`,
 /// with the object where the demonstration had it at its first step, and judges the result.
-fn act(
+pub(super) fn act(
     demo: &Sequence,
     action: Action,
     steps: TaskSteps,

@@ -220,9 +220,8 @@ impl Predictor {
     }
 
     /// Only the joint means at `target_times` (radians and the gripper value, one row per
-    /// target), from `observations` with blend `blend`: the image decoder, most of a target's
-    /// cost, is skipped; frames only (blend 1), a model's mirror stage gives them between the
-    /// first and the last observation (see [`Encoding::reads`]). What an arm that imitates needs ([`crate::imitate`]).
+    /// target), from `observations` with blend `blend`: [`Predictor::encode`], then
+    /// [`Predictor::decode_joints`]. What an arm that imitates needs ([`crate::imitate`]).
     pub fn predict_joints(
         &self,
         observations: &Observations,
@@ -230,9 +229,20 @@ impl Predictor {
         blend: f32,
     ) -> Result<Joints, ModelError> {
         check_times(target_times)?;
-        let encoding = self.encode(observations, blend)?;
+        self.decode_joints(&self.encode(observations, blend)?, target_times)
+    }
+
+    /// Only the joint means at `target_times` for `encoding`: the image decoder, most of a
+    /// target's cost, is skipped; frames only (blend 1), a model's mirror stage gives them
+    /// between the first and the last observation (see [`Encoding::reads`]).
+    pub fn decode_joints(
+        &self,
+        encoding: &Encoding,
+        target_times: &[f32],
+    ) -> Result<Joints, ModelError> {
+        check_times(target_times)?;
         let mut rows = self.network_joints(&encoding.representation, target_times)?;
-        if let Some((mean, _)) = self.mirrored(&encoding, target_times) {
+        if let Some((mean, _)) = self.mirrored(encoding, target_times) {
             for (k, &t) in target_times.iter().enumerate() {
                 if within_span(t, encoding.span) {
                     rows.row_mut(k).copy_from_slice(&mean[k]);

@@ -3,6 +3,7 @@ use serde::Serialize;
 use super::accumulator::{Guess, Sigma};
 use super::{Accumulator, CoverageSummary, MeanMotion, Quality, Scenario};
 use crate::data::Sequence;
+use crate::futures::{FutureScoreRow, Sampling};
 use crate::model::{linear_weights, ModelError};
 use crate::predict::{Observations, Predictor};
 
@@ -145,6 +146,13 @@ pub struct QualityReport {
     /// Blending coefficient the models were run with.
     pub blend: f32,
     pub rows: Vec<QualityRow>,
+    /// Sampled futures of the unobserved steps, per model (`dmbn score --samples`; none
+    /// without).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub futures: Vec<FutureScoreRow>,
+    /// How they were sampled.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sampling: Option<Sampling>,
 }
 
 impl QualityReport {
@@ -181,6 +189,7 @@ impl QualityReport {
                 opt(q.joint_nll, 3),
             ));
         }
+        out.push_str(&self.futures_markdown());
         let calibrated: Vec<_> = self
             .rows
             .iter()
@@ -216,6 +225,27 @@ impl QualityReport {
                 cell(c.pixels, ratio, false),
                 cell(c.moving_pixels, two, true),
                 cell(c.moving_pixels, ratio, false),
+            ));
+        }
+        out
+    }
+}
+
+impl QualityReport {
+    /// The sampled futures' table (empty without them).
+    fn futures_markdown(&self) -> String {
+        let Some(s) = &self.sampling else {
+            return String::new();
+        };
+        let mut out = format!(
+            "\n{} sampled futures of the unobserved steps ({} steps drawn each, {}, τ {}, seed {}): arm joints, rad, mean over the sequences (energy score: lower is better; the single mean's is its RMSE)\n\n| | sequences | energy score | single mean's | best of {} | a future's RMSE |\n|---|---:|---:|---:|---:|---:|\n",
+            s.samples, s.grid, s.order, s.temperature, s.seed, s.samples
+        );
+        for row in &self.futures {
+            let f = &row.scores;
+            out.push_str(&format!(
+                "| {} | {} | {:.4} | {:.4} | {:.4} | {:.4} |\n",
+                row.name, row.sequences, f.energy, f.energy_of_mean, f.best_rmse, f.sample_rmse
             ));
         }
         out

@@ -119,19 +119,32 @@ pub fn enact(
     Ok(imitate::enact(demo, action, rows, observed)?.into())
 }
 
-/// `perform(trajectory, x, y, imageSize)`: the arm performs any `Float32Array(T × 7)` of joint
-/// rows (6 angles in rad, the gripper value) with the object at `(x, y)`, as the native
-/// simulator does; returns the recorded `Episode`. Throws on a bad trajectory (a row count
-/// not a multiple of 7, NaN, an angle beyond ±2π, no row or over 2000) or placement.
-#[wasm_bindgen]
+/// `perform(trajectory, x, y, imageSize)` for Rust callers: the UR5 performs.
 pub fn perform(
+    trajectory: JsValue,
+    x: JsValue,
+    y: JsValue,
+    size: JsValue,
+) -> Result<Episode, JsError> {
+    perform_on_arm(trajectory, x, y, size, JsValue::UNDEFINED)
+}
+
+/// `perform(trajectory, x, y, imageSize, arm?)`: `arm` ("ur5", left out, or "panda") performs
+/// any `Float32Array(T × D)` of joint rows (D = 7 for the UR5: 6 angles in rad and the
+/// gripper; 8 for the Panda) with the object at `(x, y)`, as the native simulator does;
+/// returns the recorded `Episode`. Throws on a bad trajectory (a value count not a multiple
+/// of D, NaN, an angle beyond ±2π, no row or over 2000), arm or placement.
+#[wasm_bindgen(js_name = perform)]
+pub fn perform_on_arm(
     #[wasm_bindgen(unchecked_param_type = "Float32Array")] trajectory: JsValue,
     #[wasm_bindgen(unchecked_param_type = "number")] x: JsValue,
     #[wasm_bindgen(unchecked_param_type = "number")] y: JsValue,
     #[wasm_bindgen(js_name = imageSize, unchecked_param_type = "number")] size: JsValue,
+    #[wasm_bindgen(unchecked_param_type = "string | undefined")] arm: JsValue,
 ) -> Result<Episode, JsError> {
+    let arm = super::simulator::arm(&arm)?;
     let trajectory = floats(&trajectory, "trajectory")?;
-    let trajectory = Trajectory::from_flat(&trajectory)?;
+    let trajectory = Trajectory::from_flat_on(arm, &trajectory)?;
     let position = position(&x, &y)?;
     Ok(sim::perform(&trajectory, position, image_size(&size)?)?.into())
 }

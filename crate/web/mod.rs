@@ -20,7 +20,7 @@ pub use eval_episode::EvalEpisode;
 pub use folder::Folder;
 pub use forecast_error::forecast_error;
 pub use heat_map::heat_map;
-pub use imitation::{enact, perform, replay, Imitation};
+pub use imitation::{enact, perform, perform_on_arm, replay, Imitation};
 pub use model::{ModelHandle, Prediction};
 pub use region::{placement_region, Region};
 pub use simulator::Simulator;

@@ -82,6 +82,9 @@ function wrongValues(handle) {
   ];
 }
 
+/** The optional arm ("ur5" or "panda"): left out (undefined) or null is the UR5. */
+const ARM = ["arm", null, ["undefined", "null"]];
+
 /**
  * Every entry point with parameters: `call(args)` and valid `args()`; `params` names each
  * parameter (as the docs do) with the class it takes, if any, and the wrong values it accepts
@@ -139,11 +142,11 @@ const ENTRIES = {
   },
   "Prediction.meanFrame": { call: ([k]) => v.prediction.meanFrame(k), args: () => [1], params: ["k"] },
   "Prediction.sigmaMap": { call: (a) => v.prediction.sigmaMap(...a), args: () => [1, 0.1], params: ["k", ["scale", null, ["2^53"]]] },
-  "new Simulator": { call: (a) => new wasm.Simulator(...a), args: () => ["grasp", 1, S], params: ["action", "seed", "imageSize"] },
+  "new Simulator": { call: (a) => new wasm.Simulator(...a), args: () => ["grasp", 1, S, "panda"], params: ["action", "seed", "imageSize", ARM] },
   "Simulator.withObject": {
     call: (a) => wasm.Simulator.withObject(...a),
-    args: () => ["move", 0, 0.55, 1, S],
-    params: ["action", "x", "y", "seed", "imageSize"],
+    args: () => ["move", 0, 0.55, 1, S, "panda"],
+    params: ["action", "x", "y", "seed", "imageSize", ARM],
   },
   enact: {
     call: (a) => wasm.enact(...a),
@@ -158,11 +161,11 @@ const ENTRIES = {
   heatMap: { call: (a) => wasm.heatMap(...a), args: () => [v.onePx, 0.1], params: ["sigma", ["scale", null, ["2^53"]]] },
   perform: {
     call: (a) => wasm.perform(...a),
-    args: () => [v.trajectory.subarray(0, 70), 0, 0.55, S],
-    params: ["trajectory", "x", "y", "imageSize"],
+    args: () => [v.trajectory.subarray(0, 70), 0, 0.55, S, "ur5"],
+    params: ["trajectory", "x", "y", "imageSize", ARM],
   },
   replay: { call: (a) => wasm.replay(...a), args: () => [v.episode, "grasp"], params: [["episode", "Episode"], "action"] },
-  runEpisode: { call: (a) => wasm.runEpisode(...a), args: () => ["grasp", 1, S], params: ["action", "seed", "imageSize"] },
+  runEpisode: { call: (a) => wasm.runEpisode(...a), args: () => ["grasp", 1, S, "panda"], params: ["action", "seed", "imageSize", ARM] },
 };
 
 /** Entry points without parameters (getters included): each must throw on a freed object. */

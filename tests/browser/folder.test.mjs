@@ -3,7 +3,8 @@
 // wasm; and the original DMBN data ($DMBN2020, else ../shared/datasets/dmbn2020; skipped
 // without it).
 import assert from "node:assert/strict";
-import { existsSync, mkdirSync, readFileSync } from "node:fs";
+import { spawnSync } from "node:child_process";
+import { existsSync, mkdirSync, readFileSync, rmSync } from "node:fs";
 import { join } from "node:path";
 import { before, describe, test } from "node:test";
 import { pathToFileURL } from "node:url";
@@ -14,6 +15,15 @@ import { ARTIFACTS, close, errorText, open, pause, predict, ROOT, server, shot, 
 
 const FOLDERS = join(ARTIFACTS, "folders");
 let wasm;
+
+/** A Python that runs the converters (as tests/convert.rs finds one), or null. */
+function convertPython() {
+  const home = process.env.HOME ?? "";
+  for (const py of [process.env.DMBN_PYTHON_CONVERT, join(home, ".cache/dmbn/venv-convert/bin/python"), "python3"]) {
+    if (py && spawnSync(py, ["-c", "import pyarrow, av, h5py"]).status === 0) return py;
+  }
+  return null;
+}
 
 before(async () => {
   wasm = await import(pathToFileURL(join(ROOT, "pkg", "dmbn.js")).href);
@@ -143,9 +153,9 @@ describe("open a dataset", () => {
     await close(page);
   });
 
-  test("another robot's data (8 joint values a step): a 7-value model is refused, saying both counts", async () => {
-    const dir = join(FOLDERS, "robot8");
-    writeRobotFolder(dir, { ids: [0, 1], action: "move", steps: 12, joints: 8, width: 40, height: 30 });
+  test("another robot's data (9 joint values a step, which no shipped model reads): a 7-value model is refused, saying both counts", async () => {
+    const dir = join(FOLDERS, "robot9");
+    writeRobotFolder(dir, { ids: [0, 1], action: "move", steps: 12, joints: 9, width: 40, height: 30 });
     const page = await open(`${server.url}www/?workers=1`);
     await waitState(page, "ready");
     await pause(page);
@@ -157,17 +167,17 @@ describe("open a dataset", () => {
     const options = await page.evaluate(() => [...document.querySelectorAll("#sequence option")].map((o) => o.value));
     assert.deepEqual(options, ["sim", "0/move", "1/move"]);
     assert.equal(await page.inputValue("#sequence"), "0/move");
-    assert.match(await page.textContent("#object-info"), /^robot8\/0\/move: 12 steps read in \d+ ms \(frames at 64×64\)/);
-    // Neither data's models read 8 values: the page says so, naming both counts, and predicts
+    assert.match(await page.textContent("#object-info"), /^robot9\/0\/move: 12 steps read in \d+ ms \(frames at 64×64\)/);
+    // No data's models read 9 values: the page says so, naming both counts, and predicts
     // nothing (a prediction had been made, so the new sequence would otherwise be predicted).
     await waitState(page, "error");
-    const refusal = /reads 7 joint values a step, the folder's sequences have 8: choose a model trained on this robot/;
+    const refusal = /reads 7 joint values a step, the folder's sequences have 9: choose a model trained on this robot/;
     assert.match(await errorText(page), refusal);
-    assert.match(await page.textContent("#status"), /sequences have 8 joint values a step/);
-    // The panels are the sequence's: 8 of them, the legend in the ninth cell (3 rows of 4).
-    assert.equal(await page.getAttribute("#joints-plot", "data-panels"), "8");
+    assert.match(await page.textContent("#status"), /sequences have 9 joint values a step/);
+    // The panels are the sequence's: 9 of them, the legend in the tenth cell (3 rows of 4).
+    assert.equal(await page.getAttribute("#joints-plot", "data-panels"), "9");
     assert.equal(await page.getAttribute("#joints-plot", "data-columns"), "4");
-    await shot(page, "folder-robot8");
+    await shot(page, "folder-robot9");
     // Predict, another model, the modes: each refused the same way, never asked of the workers.
     const refused = async (action) => {
       await action();
@@ -201,30 +211,30 @@ describe("open a dataset", () => {
     await close(page);
   });
 
-  test("another robot's data with a model of its 8 joint values: chosen, predicted, forecast", async () => {
-    const dir = join(FOLDERS, "robot8-model");
-    writeRobotFolder(dir, { ids: [0, 1], action: "move", steps: 12, joints: 8, width: 40, height: 30 });
-    // No shipped model reads 8 values: DMBN-PTE widened (models.mjs) stands in for one, as
+  test("another robot's data with a model of its 9 joint values: chosen, predicted, forecast", async () => {
+    const dir = join(FOLDERS, "robot9-model");
+    writeRobotFolder(dir, { ids: [0, 1], action: "move", steps: 12, joints: 9, width: 40, height: 30 });
+    // No shipped model reads 9 values: DMBN-PTE widened (models.mjs) stands in for one, as
     // the simulator's default model (a weight override); the page starts with DMBN (7).
-    const names = ["rail", "base", "shoulder", "elbow", "wrist 1", "wrist 2", "wrist 3", "gripper"];
-    virtualFiles["/test/robot8.dmbn"] = widenModel(readFileSync(join(ROOT, "assets", "models", "pte-sim.dmbn")), 8, names);
-    const page = await open(`${server.url}www/?workers=2&model=dmbn&attn=/test/robot8.dmbn`);
+    const names = ["rail", "base", "shoulder", "elbow", "wrist 1", "wrist 2", "wrist 3", "finger 1", "finger 2"];
+    virtualFiles["/test/robot9.dmbn"] = widenModel(readFileSync(join(ROOT, "assets", "models", "pte-sim.dmbn")), 9, names);
+    const page = await open(`${server.url}www/?workers=2&model=dmbn&attn=/test/robot9.dmbn`);
     await waitState(page, "ready");
     await pause(page);
     await openFolder(page, dir);
-    // The 8-value model fits the folder: it is chosen.
+    // The 9-value model fits the folder: it is chosen.
     await page.waitForFunction(() => document.getElementById("model").value === "attn");
     await waitState(page, "ready");
     assert.equal(await page.locator("#error").isHidden(), true, await errorText(page));
     const info = await page.evaluate(() => window.dmbnTimings.models.attn);
-    assert.equal(info.jointCount, 8);
+    assert.equal(info.jointCount, 9);
     assert.deepEqual(info.jointNames, names);
-    assert.equal(await page.getAttribute("#joints-plot", "data-panels"), "8");
+    assert.equal(await page.getAttribute("#joints-plot", "data-panels"), "9");
     await pause(page);
     await predict(page);
     assert.equal(await page.evaluate(() => document.body.dataset.state), "predicted", await errorText(page));
-    await shot(page, "folder-robot8-model");
-    // Live mode forecasts, its error computed over 8 values a step.
+    await shot(page, "folder-robot9-model");
+    // Live mode forecasts, its error computed over 9 values a step.
     const before = await predictions(page);
     await page.selectOption("#mode", "live");
     await page.waitForFunction((n) => Number(document.body.dataset.predictions) > n || document.body.dataset.state === "error", before);
@@ -235,8 +245,58 @@ describe("open a dataset", () => {
     await page.selectOption("#mode", "t");
     await page.selectOption("#model", "dmbn");
     await waitState(page, "error");
-    assert.match(await errorText(page), /^The DMBN model reads 7 joint values a step, the folder's sequences have 8/);
+    assert.match(await errorText(page), /^The DMBN model reads 7 joint values a step, the folder's sequences have 9/);
     await close(page);
+  });
+
+  test("the Panda's data (8 joint values a step, no object files): its model is offered, chosen and predicts", async () => {
+    const dir = join(FOLDERS, "panda");
+    writeFolder(wasm, dir, [{ action: "move", seed: 4 }, { action: "grasp", seed: 6 }], 64, { object: false, arm: "panda" });
+    const page = await open(`${server.url}www/?workers=2`);
+    await waitState(page, "ready");
+    await openFolder(page, dir);
+    assert.equal(await page.inputValue("#sequence"), "4/move");
+    await page.waitForFunction(() => document.getElementById("model").value === "attn-panda");
+    await waitState(page, "ready");
+    const models = await page.evaluate(() => [...document.getElementById("model").options].map((o) => o.value));
+    assert.deepEqual(models, ["attn-panda"]);
+    assert.equal(await page.getAttribute("#joints-plot", "data-panels"), "8");
+    await pause(page);
+    await predict(page);
+    await shot(page, "folder-panda");
+    assert.deepEqual(page.problems, []);
+    await close(page);
+  });
+
+  // The converters' output (python/tests/converted.py: a LeRobot v2.1 dataset and a robomimic
+  // file written by the formats' own libraries, converted) opens in the page like any folder.
+  const python = convertPython();
+  test("converted LeRobot and robomimic data open, and predict with a model of their joint count", { skip: python ? false : "no Python with pyarrow, av and h5py (see tests/convert.rs)" }, async () => {
+    const out = join(FOLDERS, "converted");
+    rmSync(out, { recursive: true, force: true });
+    const made = spawnSync(python, ["python/tests/converted.py", out], { cwd: ROOT, encoding: "utf8", env: { ...process.env, PYTHONDONTWRITEBYTECODE: "1" } });
+    assert.equal(made.status, 0, made.stderr);
+    const model9 = widenModel(readFileSync(join(ROOT, "assets", "models", "pte-sim.dmbn")), 9);
+    virtualFiles["/test/converted9.dmbn"] = model9;
+    // LeRobot: 8 state values (the Panda's model reads 8); robomimic: 7 joints + 2 fingers (the
+    // widened test model, as the simulator's default).
+    for (const [name, d, action, model] of [["from-lerobot", 8, "pick", "attn-panda"], ["from-robomimic", 9, "lift", "attn"]]) {
+      // (DMBN, of 7 values, on screen first: the simulator's episode at load is the UR5's.)
+      const page = await open(`${server.url}www/?workers=2&model=dmbn&attn=/test/converted9.dmbn`);
+      await waitState(page, "ready");
+      await openFolder(page, join(out, name));
+      assert.equal(await page.locator("#error").isHidden(), true, await errorText(page));
+      assert.equal(await page.inputValue("#sequence"), `0/${action}`);
+      await page.waitForFunction((m) => document.getElementById("model").value === m, model);
+      await waitState(page, "ready");
+      assert.equal(await page.getAttribute("#joints-plot", "data-panels"), String(d), name);
+      assert.match(await page.textContent("#object-info"), new RegExp(`^${name}/0/${action}: \\d+ steps read`));
+      await pause(page);
+      await predict(page);
+      await shot(page, `folder-${name}`);
+      assert.deepEqual(page.problems, [], name);
+      await close(page);
+    }
   });
 
   // As the native tests: $DMBN2020, else ../shared/datasets/dmbn2020 beside the clone.

@@ -45,18 +45,19 @@ const table = (values, width) =>
 /**
  * The files of the episodes `[{action, seed}]` of the wasm package `wasm` at `size` px as
  * sequences 0, 1, … of a folder named `root`: `{files: {path: bytes}, digests: {"id/action": digest}}`.
+ * `arm`: the simulator's arm ("ur5", the default, or "panda": 8 joint values a step).
  */
-export function folderFiles(wasm, root, episodes, size = 64, { object = true } = {}) {
+export function folderFiles(wasm, root, episodes, size = 64, { object = true, arm = "ur5" } = {}) {
   const files = {};
   const digests = {};
   const text = (s) => Buffer.from(s);
   episodes.forEach(({ action, seed, id = seed }) => {
-    const ep = wasm.runEpisode(action, seed, size);
+    const ep = wasm.runEpisode(action, seed, size, arm);
     const dir = `${root}/${id}/${action}`;
     const frames = ep.frames();
     const px = size * size * 3;
     for (let k = 0; k < ep.len; k++) files[`${dir}/${k}.png`] = png(frames.subarray(k * px, (k + 1) * px), size);
-    files[`${dir}/joint_${id}.txt`] = text(table(ep.joints(), 7));
+    files[`${dir}/joint_${id}.txt`] = text(table(ep.joints(), ep.jointCount));
     if (object) {
       files[`${dir}/object_${id}.txt`] = text(table(ep.object(), 3));
       files[`${dir}/endpoint_${id}.txt`] = text(table(ep.endpoint(), 7));
@@ -79,10 +80,10 @@ function writeFiles(root, files) {
 /**
  * Writes the episodes `[{action, seed}]` of the wasm package `wasm` at `size` px as sequences
  * 0, 1, … of a folder at `root` (replaced); returns their digests by "id/action". `object:
- * false` leaves out the object and endpoint files (data that has none).
+ * false` leaves out the object and endpoint files (data that has none); `arm` as folderFiles.
  */
-export function writeFolder(wasm, root, episodes, size = 64, { object = true } = {}) {
-  const { files, digests } = folderFiles(wasm, ".", episodes, size, { object });
+export function writeFolder(wasm, root, episodes, size = 64, { object = true, arm = "ur5" } = {}) {
+  const { files, digests } = folderFiles(wasm, ".", episodes, size, { object, arm });
   writeFiles(root, files);
   return digests;
 }

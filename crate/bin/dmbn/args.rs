@@ -5,6 +5,7 @@ use std::path::{Path, PathBuf};
 use clap::Args;
 
 use dmbn::data::{Dataset, Disk, Sequence, SequenceRef};
+use dmbn::futures::{Order, Sampling};
 use dmbn::predict::Predictor;
 
 use crate::error::CliError;
@@ -125,5 +126,58 @@ impl ModelAndSequence {
         let (id, action) = &self.sequence;
         let seq = dataset.read(dataset.find(*id, action)?, Some(size))?;
         Ok((predictor, seq))
+    }
+}
+
+/// A model, one sequence, the steps it observes and the blend (`predict`, `sample`).
+#[derive(Args)]
+pub struct Observing {
+    #[command(flatten)]
+    pub input: ModelAndSequence,
+    /// Observed steps (context), comma separated step indices.
+    #[arg(long, value_delimiter = ',', required = true)]
+    pub observe: Vec<usize>,
+    /// Blending coefficient c: 1 = images only, 0 = joints only, 0.5 = both.
+    #[arg(long, default_value_t = 0.5, value_parser = parse_blend)]
+    pub blend: f32,
+}
+
+impl Observing {
+    /// The observed steps of `seq` as a joint plot marks them: (phase, joint values).
+    pub fn points(&self, seq: &Sequence) -> Vec<(f32, Vec<f32>)> {
+        let times = seq.times();
+        let rows = self.observe.iter();
+        rows.map(|&k| (times[k], seq.joints[k].to_vec())).collect()
+    }
+}
+
+/// How sampled futures are drawn, but for their number (`sample`, `score`, `imitate`).
+#[derive(Args)]
+pub struct SamplingArgs {
+    /// Steps drawn one after another per future, evenly spaced over the imagined steps.
+    #[arg(long, default_value_t = Sampling::default().grid)]
+    pub grid: usize,
+    /// The order the grid is drawn in: left-to-right or random.
+    #[arg(long, default_value_t = Sampling::default().order)]
+    pub order: Order,
+    /// τ: each drawn step's σ is multiplied by this (below 1: futures nearer the mean).
+    #[arg(long, default_value_t = Sampling::default().temperature)]
+    pub temperature: f32,
+    /// Seeds the draws (the same seed, the same futures; `score` and `imitate` draw sequence
+    /// i's, or demonstration id i's, from seed + i).
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+}
+
+impl SamplingArgs {
+    /// `samples` futures drawn so.
+    pub fn sampling(&self, samples: usize) -> Sampling {
+        Sampling {
+            samples,
+            grid: self.grid,
+            order: self.order,
+            temperature: self.temperature,
+            seed: self.seed,
+        }
     }
 }

@@ -8,14 +8,16 @@ use clap::{Args, ValueEnum};
 use serde::Serialize;
 
 use dmbn::data::{Dataset, Disk, Sequence, SequenceRef};
+use dmbn::futures::Sampling;
 use dmbn::imitate::{
-    imitate, mean_motion, replay, with_noise, ImitateError, ImitationReport, OutcomeSums, Task,
+    imitate, imitate_futures, mean_motion, replay, with_noise, FutureSums, FuturesReport,
+    ImitateError, ImitationReport, OutcomeSums, Task,
 };
 use dmbn::predict::Predictor;
 use dmbn::quality::MeanMotion;
 use dmbn::sim::{Action, Arm, Outcome};
 
-use crate::args::{in_ids, parse_blend, parse_ids, sequences_in};
+use crate::args::{in_ids, parse_blend, parse_ids, sequences_in, SamplingArgs};
 use crate::error::CliError;
 use crate::output::{model_name, progress, write_json};
 
@@ -61,6 +63,14 @@ pub struct ImitateArgs {
     /// more rows): how much error of a model's kind each action tolerates.
     #[arg(long = "noise", value_parser = parse_noise)]
     noise: Vec<f32>,
+    /// Also imagine this many futures per demonstration with each model (autoregressive
+    /// sampling, as `dmbn sample`) and perform every one: validity (the share that are valid
+    /// actions) and coverage (the share of demonstrations one of them succeeds on).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=Sampling::MAX_SAMPLES as i64))]
+    samples: Option<u32>,
+    /// How the futures are drawn (with --samples).
+    #[command(flatten)]
+    sampling: SamplingArgs,
     /// Write the reports as JSON here (a list, one per task, with every performance's outcome).
     #[arg(long)]
     json: Option<PathBuf>,
@@ -80,6 +90,11 @@ struct TaskJson {
     #[serde(flatten)]
     report: ImitationReport,
     performances: Vec<Performed>,
+    /// With --samples: the sampled futures' table, and every future's outcome.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    futures: Option<FuturesReport>,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    future_performances: Vec<Performed>,
 }
 
 const CEILING: &str = "ceiling: recorded joints";
@@ -178,6 +193,10 @@ pub fn run(args: ImitateArgs) -> Result<(), CliError> {
         // Per action, per row (in `names`' order).
         let mut sums: BTreeMap<Action, Vec<OutcomeSums>> = BTreeMap::new();
         let mut performances = Vec::new();
+        // With --samples: per action, per model.
+        let mut future_sums: BTreeMap<Action, Vec<FutureSums>> = BTreeMap::new();
+        let mut future_performances = Vec::new();
+        let sampling = args.samples.map(|s| args.sampling.sampling(s as usize));
         let rows = names.len();
         let bar = progress(demos.len() * rows, &format!("{task}"));
         for (i, (id, action, demo)) in demos.iter().enumerate() {
@@ -192,13 +211,39 @@ pub fn run(args: ImitateArgs) -> Result<(), CliError> {
                 performed.push(with_noise(demo, *action, task, k, rmse, seed).map_err(named)?);
             }
             bar.inc(2 + args.noise.len() as u64);
+            let mut futures = Vec::new();
             for (_, p) in &predictors {
                 let demo = &by_size[&p.model().image_size()][i].2;
                 performed.push(imitate(p, demo, *action, task, k, blend).map_err(named)?);
+                if let Some(sampling) = &sampling {
+                    let seeded = Sampling {
+                        seed: sampling.seed.wrapping_add(u64::from(*id)),
+                        ..*sampling
+                    };
+                    let f = imitate_futures(p, demo, *action, task, k, blend, &seeded);
+                    futures.push(f.map_err(named)?);
+                }
                 bar.inc(1);
             }
-            if performed.iter().any(Option::is_none) {
+            if performed.iter().any(Option::is_none) || futures.iter().any(Option::is_none) {
                 continue; // too short for the task
+            }
+            if sampling.is_some() {
+                let entry = future_sums
+                    .entry(*action)
+                    .or_insert_with(|| vec![FutureSums::default(); predictors.len()]);
+                let models = performed.len() - predictors.len();
+                for (m, f) in futures.iter().flatten().enumerate() {
+                    let mean = performed[models + m].as_ref().expect("checked above");
+                    entry[m].add(f, mean);
+                    for (s, future) in f.iter().enumerate() {
+                        future_performances.push(Performed {
+                            id: *id,
+                            trajectory: format!("{} future {s}", predictors[m].0),
+                            outcome: future.outcome,
+                        });
+                    }
+                }
             }
             let entry = sums
                 .entry(*action)
@@ -226,9 +271,29 @@ pub fn run(args: ImitateArgs) -> Result<(), CliError> {
             }
         }
         println!("{}", report.table());
+        let futures = sampling.map(|sampling| {
+            let mut futures = FuturesReport {
+                task,
+                sampling,
+                rows: Vec::new(),
+            };
+            for (action, rows) in &future_sums {
+                let ceiling = sums[action][0]
+                    .row(CEILING, action.name(), None)
+                    .success_rate;
+                for (m, s) in rows.iter().enumerate() {
+                    let name = &predictors[m].0;
+                    futures.rows.push(s.row(name, action.name(), Some(ceiling)));
+                }
+            }
+            println!("{}", futures.table());
+            futures
+        });
         out.push(TaskJson {
             report,
             performances,
+            futures,
+            future_performances,
         });
     }
     if let Some(path) = &args.json {

@@ -25,6 +25,8 @@ mod probe;
 #[cfg(not(target_arch = "wasm32"))]
 mod probe_sets;
 #[cfg(not(target_arch = "wasm32"))]
+mod sample;
+#[cfg(not(target_arch = "wasm32"))]
 mod score;
 #[cfg(not(target_arch = "wasm32"))]
 mod simulate;
@@ -34,7 +36,7 @@ mod simulate;
 #[command(
     name = "dmbn",
     version,
-    about = "DMBN datasets and models: simulate, inspect, predict, eval, probe, score, calibrate, imitate, export, import"
+    about = "DMBN datasets and models: simulate, inspect, predict, sample, eval, probe, score, calibrate, imitate, export, import"
 )]
 struct Cli {
     #[command(subcommand)]
@@ -59,6 +61,16 @@ enum Command {
     /// and scores.json (with --arrays also prediction.safetensors); prints MSE and NLL of both
     /// modalities.
     Predict(predict::PredictArgs),
+    /// Draw S coherent futures of a sequence from a few observed steps (autoregressive CNP
+    /// sampling): one performable joint trajectory each.
+    ///
+    /// The model draws the joints at --grid of the imagined steps one after another, each
+    /// added to its contexts with the frame it predicts there, then decodes its mean at every
+    /// step. Writes samples.csv and samples.json (every future's joints and drawn steps, the
+    /// single mean, the truth, the scores), fan.png (the futures over the truth and the mean's
+    /// ±2σ band) and strips.png (frames of the truth, the mean and each future); prints the
+    /// energy score of the futures against the single mean's.
+    Sample(sample::SampleArgs),
     /// Reconstruct a t, p or f sequence from K observations (the paper's Figures 2-3).
     ///
     /// Writes figure.png (observed, generated with σ maps, targets, joint curves) and
@@ -90,7 +102,10 @@ enum Command {
     /// frames: K evenly spaced frames observed (no joints), the arm performs the predicted
     /// joint means; finish: the first 30% observed, performed as recorded, then the
     /// prediction. The object is placed as in the demonstration; a grasp succeeds when it
-    /// lifts the object 10 cm, a push when it lands within 3 cm of the demonstration's spot.
+    /// lifts the object 10 cm and carries it to within 5 cm of the demonstration's spot, a
+    /// push when it lands within 3 cm of it. With --samples S, each model also imagines S
+    /// futures per demonstration (as `dmbn sample`), all performed: their validity and
+    /// coverage beside the single mean's row.
     /// Each model against the ceiling (the recorded joints performed) and the floor (the
     /// action's mean motion performed): success rate, object and path errors, joint RMSE.
     Imitate(imitate::ImitateArgs),
@@ -119,6 +134,7 @@ fn main() -> std::process::ExitCode {
         Command::Simulate(args) => simulate::run(args),
         Command::Inspect(args) => inspect::run(args),
         Command::Predict(args) => predict::run(args),
+        Command::Sample(args) => sample::run(args),
         Command::Eval(args) => eval::run(args),
         Command::Probe(args) => probe::run(args),
         Command::Score(args) => score::run(args),

@@ -10,20 +10,14 @@ use dmbn::data::Sequence;
 use dmbn::figure::{joint_plot, save_png, JointPlot};
 use dmbn::predict::{prediction_arrays, Observations, Scores, SequencePrediction};
 
-use crate::args::{parse_blend, ModelAndSequence};
+use crate::args::Observing;
 use crate::error::CliError;
 use crate::output::{create_dir, write, write_json};
 
 #[derive(Args)]
 pub struct PredictArgs {
     #[command(flatten)]
-    input: ModelAndSequence,
-    /// Observed steps (context), comma separated step indices.
-    #[arg(long, value_delimiter = ',', required = true)]
-    observe: Vec<usize>,
-    /// Blending coefficient c: 1 = images only, 0 = joints only, 0.5 = both.
-    #[arg(long, default_value_t = 0.5, value_parser = parse_blend)]
-    blend: f32,
+    observing: Observing,
     /// Output folder (created if missing; files in it are replaced).
     #[arg(long)]
     out: PathBuf,
@@ -45,10 +39,10 @@ struct Report<'a> {
 }
 
 pub fn run(args: PredictArgs) -> Result<(), CliError> {
-    let (predictor, seq) = args.input.load()?;
-    let (id, action) = &args.input.sequence;
-    let observations = Observations::from_sequence(&seq, &args.observe)?;
-    let prediction = predictor.predict(&observations, &seq.times(), args.blend)?;
+    let (predictor, seq) = args.observing.input.load()?;
+    let (id, action) = &args.observing.input.sequence;
+    let observations = Observations::from_sequence(&seq, &args.observing.observe)?;
+    let prediction = predictor.predict(&observations, &seq.times(), args.observing.blend)?;
     let scores = Scores::of(
         &prediction,
         &seq.frames,
@@ -62,22 +56,22 @@ pub fn run(args: PredictArgs) -> Result<(), CliError> {
     let report = Report {
         model: predictor.model().kind().to_string(),
         sequence: format!("{id}/{action}"),
-        observed: &args.observe,
-        blend: args.blend,
+        observed: &args.observing.observe,
+        blend: args.observing.blend,
         steps: seq.len(),
         scores,
     };
     write_json(&args.out.join("scores.json"), &report)?;
     if args.arrays {
-        let bytes = prediction_arrays(&observations, args.blend, &prediction)?;
+        let bytes = prediction_arrays(&observations, args.observing.blend, &prediction)?;
         write(&args.out.join("prediction.safetensors"), &bytes)?;
     }
     println!(
         "{} on {id}/{action} ({} steps), observed {:?}, blend {}",
         report.model,
         seq.len(),
-        args.observe,
-        args.blend
+        args.observing.observe,
+        args.observing.blend
     );
     println!(
         "image: MSE {:.5}  NLL {:.4}\njoints: MSE {:.5}  NLL {:.4} (normalised units)",
@@ -117,17 +111,14 @@ fn write_figures(
         )?;
     }
     let times = seq.times();
-    let observed: Vec<(f32, Vec<f32>)> = args
-        .observe
-        .iter()
-        .map(|&k| (times[k], seq.joints[k].to_vec()))
-        .collect();
+    let observed = args.observing.points(seq);
     let plot = JointPlot {
         times: &times,
         truth: Some(&seq.joints),
         mean: &prediction.joint_mean,
         sigma: &prediction.joint_sigma,
         observed: &observed,
+        samples: &[],
         names,
     };
     save_png(&args.out.join("joints.png"), &joint_plot(&plot, 900, 900)?)?;

@@ -7,10 +7,11 @@ use clap::{Args, ValueEnum};
 
 use dmbn::data::Sequence;
 use dmbn::figure::{calibration_plot, save_png};
+use dmbn::futures::{score_futures, FutureScoreSums, Sampling};
 use dmbn::predict::Predictor;
 use dmbn::quality::{score_sequence, Accumulator, MeanMotion, QualityReport, QualityRow, Scenario};
 
-use crate::args::{in_ids, open_for, parse_blend, parse_ids, sequences_in};
+use crate::args::{in_ids, open_for, parse_blend, parse_ids, sequences_in, SamplingArgs};
 use crate::error::CliError;
 use crate::output::{model_name, progress, write_json};
 
@@ -56,6 +57,14 @@ pub struct ScoreArgs {
     /// Write the reports as JSON here (a list, one per scenario).
     #[arg(long)]
     json: Option<PathBuf>,
+    /// Sampled futures per sequence (autoregressive sampling, as `dmbn sample`): their energy
+    /// score, the single mean's, best-of-S and a future's RMSE at the unobserved steps; 0:
+    /// none.
+    #[arg(long, default_value_t = Sampling::default().samples as u32, value_parser = clap::value_parser!(u32).range(0..=Sampling::MAX_SAMPLES as i64))]
+    samples: u32,
+    /// How the futures are drawn (with --samples).
+    #[command(flatten)]
+    sampling: SamplingArgs,
     /// Draw the models' calibration curves here (PNG): per scenario, for the joints and the
     /// moving pixels, the fraction of true values inside each central interval of the
     /// predicted Gaussian against the fraction it claims.
@@ -109,16 +118,19 @@ pub fn run(args: ScoreArgs) -> Result<(), CliError> {
     }
 
     let observations = args.observations as usize;
+    let sampling = (args.samples > 0).then(|| args.sampling.sampling(args.samples as usize));
     let mut reports = Vec::new();
     for &scenario in &scenarios {
         let mut baseline = Accumulator::default();
         let mut mean_motion: Option<Accumulator> = None;
         let mut rows = Vec::new();
+        let mut futures = Vec::new();
         for (index, (path, predictor)) in predictors.iter().enumerate() {
             let (sequences, mean) = &by_size[&predictor.model().image_size()];
             let bar = progress(sequences.len(), &format!("{scenario} {}", path.display()));
             let mut model = Accumulator::default();
-            for (action, seq) in sequences {
+            let mut sampled = FutureScoreSums::default();
+            for (i, (action, seq)) in sequences.iter().enumerate() {
                 let scores = score_sequence(
                     predictor,
                     seq,
@@ -128,6 +140,21 @@ pub fn run(args: ScoreArgs) -> Result<(), CliError> {
                     args.blend,
                     mean.as_ref(),
                 )?;
+                let steps = scenario.steps(seq.len(), observations);
+                if let (Some(sampling), Some(steps)) = (&sampling, steps) {
+                    let seeded = Sampling {
+                        seed: sampling.seed.wrapping_add(i as u64),
+                        ..*sampling
+                    };
+                    let observed = &steps.observed;
+                    let imagined: Vec<usize> = (steps.scored.iter())
+                        .filter(|k| !observed.contains(k))
+                        .copied()
+                        .collect();
+                    let scores =
+                        score_futures(predictor, seq, observed, &imagined, args.blend, &seeded)?;
+                    sampled.add(&scores);
+                }
                 bar.inc(1);
                 let Some(scores) = scores else { continue };
                 model.merge(&scores.model);
@@ -142,6 +169,9 @@ pub fn run(args: ScoreArgs) -> Result<(), CliError> {
                 }
             }
             bar.finish_and_clear();
+            if sampling.is_some() {
+                futures.push(sampled.row(&model_name(path)));
+            }
             rows.push(QualityRow {
                 name: model_name(path),
                 model: true,
@@ -168,6 +198,8 @@ pub fn run(args: ScoreArgs) -> Result<(), CliError> {
             },
             blend: args.blend,
             rows,
+            futures,
+            sampling,
         };
         println!("{}", report.markdown());
         reports.push(report);

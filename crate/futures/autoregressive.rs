@@ -1,0 +1,158 @@
+use rand::{RngExt, SeedableRng};
+use rand_pcg::Pcg64;
+
+use super::{FutureScores, Order, Sampling};
+use crate::data::{Joints, Sequence};
+use crate::model::ModelError;
+use crate::predict::{Encoding, Observations, Predictor};
+
+/// One sampled future: what the decoders condition on once its steps are drawn, and the draws.
+#[derive(Debug, Clone)]
+pub struct Future {
+    /// The observations plus the drawn steps, encoded: decode it for the future's mean at any
+    /// target ([`Predictor::decode`], or [`Predictor::decode_joints`] for the joints alone).
+    pub encoding: Encoding,
+    /// The drawn steps in the order drawn: phase and joint values (dataset units).
+    pub drawn: Vec<(f32, Vec<f32>)>,
+}
+
+/// S futures of the sequence `observations` show, over `target_times` (the steps to imagine,
+/// increasing), with blend `blend`, drawn autoregressively (the module's doc): per future, the
+/// joints at `sampling.grid` of the targets, one after another, each from the Gaussian the
+/// model predicts there given the observations and the steps drawn before it, then added to
+/// the contexts with the mean frame predicted there. Deterministic in `sampling.seed`; future
+/// `s` is the same whatever S.
+pub fn draw_futures(
+    predictor: &Predictor,
+    observations: &Observations,
+    target_times: &[f32],
+    blend: f32,
+    sampling: &Sampling,
+) -> Result<Vec<Future>, ModelError> {
+    sampling.validate()?;
+    if target_times.is_empty() {
+        return Err(ModelError::observation(
+            "target_times",
+            "is empty: expected the steps to imagine",
+        ));
+    }
+    let observed = predictor.encode_contexts(observations)?;
+    let grid = grid(target_times, sampling.grid);
+    (0..sampling.samples)
+        .map(|s| {
+            let mut rng = Pcg64::seed_from_u64(
+                sampling
+                    .seed
+                    .wrapping_add((s as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)),
+            );
+            let mut order = grid.clone();
+            if sampling.order == Order::Random {
+                for i in (1..order.len()).rev() {
+                    order.swap(i, rng.random_range(0..=i));
+                }
+            }
+            let mut contexts = observed.clone();
+            let mut drawn = Vec::with_capacity(order.len());
+            for t in order {
+                let here = predictor.decode(&predictor.represent(&contexts, blend)?, &[t])?;
+                let joints: Vec<f32> = here
+                    .joint_mean_at(0)
+                    .iter()
+                    .zip(here.joint_sigma_at(0))
+                    .map(|(m, s)| m + sampling.temperature * s * standard_normal(&mut rng))
+                    .collect();
+                let step = Observations {
+                    image_size: observations.image_size,
+                    frames: here.mean_frame(0),
+                    joints: joints.clone(),
+                    times: vec![t],
+                };
+                contexts = contexts.cat(&predictor.encode_contexts(&step)?)?;
+                drawn.push((t, joints));
+            }
+            Ok(Future {
+                encoding: predictor.represent(&contexts, blend)?,
+                drawn,
+            })
+        })
+        .collect()
+}
+
+/// The joint rows at `times` (a sequence's every step, say) of S futures drawn over `future`
+/// (the times of the steps to imagine) by [`draw_futures`]: one performable trajectory each.
+pub fn sample_trajectories(
+    predictor: &Predictor,
+    observations: &Observations,
+    future: &[f32],
+    times: &[f32],
+    blend: f32,
+    sampling: &Sampling,
+) -> Result<Vec<Joints>, ModelError> {
+    draw_futures(predictor, observations, future, blend, sampling)?
+        .iter()
+        .map(|f| predictor.decode_joints(&f.encoding, times))
+        .collect()
+}
+
+/// S futures of `seq` from its `observed` steps scored against it at the `imagined` ones
+/// (increasing), beside the single mean's prediction ([`FutureScores`]).
+pub fn score_futures(
+    predictor: &Predictor,
+    seq: &Sequence,
+    observed: &[usize],
+    imagined: &[usize],
+    blend: f32,
+    sampling: &Sampling,
+) -> Result<FutureScores, ModelError> {
+    let observations = Observations::from_sequence(seq, observed)?;
+    let times = seq.times();
+    let at: Vec<f32> = imagined.iter().map(|&k| times[k]).collect();
+    let futures = sample_trajectories(predictor, &observations, &at, &at, blend, sampling)?;
+    let mean = predictor.predict_joints(&observations, &at, blend)?;
+    let truth = Joints::from_slices(seq.joints.width(), imagined.iter().map(|&k| &seq.joints[k]));
+    let all: Vec<usize> = (0..imagined.len()).collect();
+    Ok(FutureScores::of(&futures, &mean, &truth, &all))
+}
+
+/// `g` of `targets`, evenly spaced by index and ending at the last (all of them when there are
+/// no more than `g`).
+fn grid(targets: &[f32], g: usize) -> Vec<f32> {
+    let m = targets.len();
+    if m <= g {
+        return targets.to_vec();
+    }
+    (1..=g)
+        .map(|i| targets[(i * (m - 1) + g / 2) / g])
+        .collect()
+}
+
+/// A standard normal draw (Box-Muller through libm: the same bits natively and in wasm).
+fn standard_normal(rng: &mut Pcg64) -> f32 {
+    let u1 = 1.0 - rng.random_range(0.0f64..1.0);
+    let u2 = rng.random_range(0.0f64..1.0);
+    (libm::sqrt(-2.0 * libm::log(u1)) * libm::cos(core::f64::consts::TAU * u2)) as f32
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_grid_is_evenly_spaced_and_ends_at_the_last_target() {
+        let targets: Vec<f32> = (0..41).map(|k| k as f32 / 40.0).collect();
+        assert_eq!(grid(&targets, 4), vec![0.25, 0.5, 0.75, 1.0]);
+        assert_eq!(grid(&targets[..3], 4), targets[..3].to_vec());
+        assert_eq!(grid(&targets, 1), vec![1.0]);
+    }
+
+    #[test]
+    fn normal_draws_have_mean_0_and_variance_1() {
+        let mut rng = Pcg64::seed_from_u64(7);
+        let n = 20_000;
+        let draws: Vec<f64> = (0..n).map(|_| standard_normal(&mut rng) as f64).collect();
+        let mean = draws.iter().sum::<f64>() / n as f64;
+        let var = draws.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / n as f64;
+        assert!(mean.abs() < 0.03, "{mean}");
+        assert!((var - 1.0).abs() < 0.04, "{var}");
+    }
+}

@@ -1,0 +1,19 @@
+//! Many futures: coherent samples of what may come after the observations, where one mean is
+//! the wrong answer (how far a push goes is not in its first 30%).
+//!
+//! A CNP predicts a Gaussian per target step, independently: drawing each step from its own
+//! marginal gives jitter, not a trajectory. Deployed autoregressively (Bruinsma et al.,
+//! "Autoregressive Conditional Neural Processes", ICLR 2023; wesselb/neuralprocesses'
+//! `ar_predict`), the same network gives coherent samples: the future is drawn at a sparse grid
+//! of target steps one after another, each draw (joints, and the predicted frame there) added
+//! to the contexts before the next, then the mean at every step is decoded conditioned on the
+//! contexts plus the drawn points: one smooth trajectory per sample ([`draw_futures`]).
+//! [`EnergyScore`] judges a set of sampled trajectories against the truth (a strictly proper
+//! score for samples), beside the single mean's.
+mod autoregressive;
+mod energy_score;
+mod sampling;
+
+pub use autoregressive::{draw_futures, sample_trajectories, score_futures, Future};
+pub use energy_score::{EnergyScore, FutureScoreRow, FutureScoreSums, FutureScores};
+pub use sampling::{Order, Sampling};

@@ -1,0 +1,293 @@
+//! Many futures (crate::futures): autoregressive samples of the page's default model are
+//! coherent trajectories (smooth, unlike independent draws from the per-step Gaussians), spread
+//! where the future is ambiguous, seeded and deterministic; `dmbn sample` writes them and
+//! refuses bad settings; `dmbn imitate --samples` performs them.
+#![cfg(not(target_arch = "wasm32"))]
+
+mod support;
+
+use std::process::{Command, Output};
+
+use dmbn::data::Joints;
+use dmbn::futures::{draw_futures, sample_trajectories, FutureScores, Order, Sampling};
+use dmbn::imitate::{imitate_futures, Task};
+use dmbn::predict::{Observations, Predictor};
+use dmbn::sim::{episode, Action};
+
+fn predictor() -> Predictor {
+    Predictor::load(support::asset("models/attn-sim.dmbn")).unwrap()
+}
+
+fn dmbn(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_dmbn"))
+        .args(args)
+        .output()
+        .expect("run dmbn")
+}
+
+/// Mean absolute second difference of each arm joint over the steps `from..`: how jagged.
+fn roughness(joints: &Joints, from: usize) -> f64 {
+    let arm = joints.width() - 1;
+    let mut sum = 0.0;
+    let mut n = 0;
+    for k in from + 1..joints.len() - 1 {
+        for j in 0..arm {
+            let d2 = joints[k + 1][j] - 2.0 * joints[k][j] + joints[k - 1][j];
+            sum += d2.abs() as f64;
+            n += 1;
+        }
+    }
+    sum / n as f64
+}
+
+#[test]
+fn sampled_futures_are_smooth_spread_and_deterministic() {
+    let p = predictor();
+    let demo = episode(Action::Move, 424_242, 64).unwrap();
+    let steps = Task::Finish.steps(demo.len(), 5).unwrap();
+    let observations = Observations::from_sequence(&demo, &steps.observed).unwrap();
+    let times = demo.times();
+    let future = &times[steps.predicted_from..];
+    let sampling = Sampling {
+        samples: 6,
+        ..Sampling::default()
+    };
+    let futures = sample_trajectories(&p, &observations, future, &times, 0.5, &sampling).unwrap();
+    assert_eq!(futures.len(), 6);
+    let from = steps.predicted_from;
+    // Coherent: each future is as smooth as a trajectory, unlike the per-step marginals drawn
+    // independently (the same Gaussians, no conditioning between steps).
+    let marginal = p.predict(&observations, &times, 0.5).unwrap();
+    let mut rng = 12345u64;
+    let mut uniform = || {
+        rng = rng
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((rng >> 11) as f64 / (1u64 << 53) as f64).max(1e-12)
+    };
+    let draws: Vec<f32> = (0..demo.len())
+        .flat_map(|k| {
+            let (m, s) = (marginal.joint_mean_at(k), marginal.joint_sigma_at(k));
+            m.iter().zip(s).map(|(m, s)| (*m, *s)).collect::<Vec<_>>()
+        })
+        .map(|(m, s)| {
+            let z = (-2.0 * uniform().ln()).sqrt() * (std::f64::consts::TAU * uniform()).cos();
+            m + s * z as f32
+        })
+        .collect();
+    let independent = Joints::new(demo.joints.width(), draws).unwrap();
+    let jagged = roughness(&independent, from);
+    for (s, f) in futures.iter().enumerate() {
+        let r = roughness(f, from);
+        assert!(
+            r < jagged / 5.0,
+            "future {s}: roughness {r} vs independent draws' {jagged}"
+        );
+    }
+    // Spread: where the push ends is not in its first 30%, so the futures' last rows differ.
+    let last = demo.len() - 1;
+    let spread = futures
+        .iter()
+        .map(|f| (f[last][0] - futures[0][last][0]).abs())
+        .fold(0.0f32, f32::max);
+    assert!(spread > 1e-3, "the futures end alike: {spread}");
+    // Seeded: the same futures again, future s the same whatever S; another seed, others.
+    let again = sample_trajectories(&p, &observations, future, &times, 0.5, &sampling).unwrap();
+    assert_eq!(futures, again);
+    let two = Sampling {
+        samples: 2,
+        ..sampling
+    };
+    let first_two = sample_trajectories(&p, &observations, future, &times, 0.5, &two).unwrap();
+    assert_eq!(first_two[..], futures[..2]);
+    let reseeded = Sampling {
+        seed: 1,
+        ..sampling
+    };
+    let other = sample_trajectories(&p, &observations, future, &times, 0.5, &reseeded).unwrap();
+    assert_ne!(other, futures);
+    // Random order draws the same grid in another order.
+    let random = Sampling {
+        order: Order::Random,
+        grid: 3,
+        ..sampling
+    };
+    let drawn = draw_futures(&p, &observations, future, 0.5, &random).unwrap();
+    let mut grid: Vec<f32> = drawn[0].drawn.iter().map(|(t, _)| *t).collect();
+    assert_eq!(grid.len(), 3);
+    grid.sort_by(f32::total_cmp);
+    assert_eq!(*grid.last().unwrap(), *future.last().unwrap());
+    // Scores: the mean's energy score is its RMSE; the samples' are finite.
+    let mean = Joints::new(demo.joints.width(), marginal.joint_mean.clone()).unwrap();
+    let imagined: Vec<usize> = (from..demo.len()).collect();
+    let scores = FutureScores::of(&futures, &mean, &demo.joints, &imagined);
+    assert!(
+        scores.energy.is_finite() && scores.energy > 0.0,
+        "{scores:?}"
+    );
+    assert!(scores.best_rmse <= scores.sample_rmse, "{scores:?}");
+    // Bad settings are named.
+    let none = Sampling {
+        samples: 0,
+        ..sampling
+    };
+    let err = draw_futures(&p, &observations, future, 0.5, &none).unwrap_err();
+    assert!(err.to_string().contains("samples"), "{err}");
+    let err = draw_futures(&p, &observations, &[], 0.5, &sampling).unwrap_err();
+    assert!(err.to_string().contains("target_times"), "{err}");
+}
+
+#[test]
+fn every_sampled_future_is_performed() {
+    let p = predictor();
+    let demo = episode(Action::Grasp, 515_151, 64).unwrap();
+    let sampling = Sampling {
+        samples: 3,
+        ..Sampling::default()
+    };
+    let performed = imitate_futures(&p, &demo, Action::Grasp, Task::Finish, 5, 0.5, &sampling)
+        .unwrap()
+        .unwrap();
+    assert_eq!(performed.len(), 3);
+    let from = performed[0].predicted_from;
+    for imitation in &performed {
+        assert_eq!(imitation.trajectory.len(), demo.len());
+        // The observed 30% is performed as recorded, the rest as the future imagined.
+        assert_eq!(
+            imitation.trajectory[from - 1],
+            demo.joints[from - 1].to_vec()
+        );
+    }
+    assert_ne!(performed[0].trajectory, performed[1].trajectory);
+}
+
+#[test]
+fn dmbn_sample_writes_the_futures_and_refuses_bad_settings() {
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("data");
+    support::simulated_dataset(&data, [0], &[Action::Move], 600_000);
+    let model = support::asset("models/attn-sim.dmbn");
+    let out = tmp.path().join("out");
+    let run = |extra: &[&str], out: &std::path::Path| {
+        let mut args = vec!["sample", "--model", model.to_str().unwrap()];
+        args.extend(["--data", data.to_str().unwrap(), "--sequence", "0/move"]);
+        args.extend([
+            "--observe",
+            "0,5,10",
+            "--samples",
+            "3",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        args.extend(extra);
+        dmbn(&args)
+    };
+    let ok = run(&[], &out);
+    let said =
+        String::from_utf8_lossy(&ok.stdout).to_string() + &String::from_utf8_lossy(&ok.stderr);
+    assert!(ok.status.success(), "{said}");
+    assert!(said.contains("energy score"), "{said}");
+    for file in ["fan.png", "strips.png", "samples.csv", "samples.json"] {
+        assert!(out.join(file).is_file(), "{file}");
+    }
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("samples.json")).unwrap()).unwrap();
+    let futures = json["futures"].as_array().unwrap();
+    assert_eq!(futures.len(), 3);
+    let steps = json["times"].as_array().unwrap().len();
+    assert_eq!(futures[0]["joints"].as_array().unwrap().len(), steps);
+    assert_eq!(
+        futures[0]["drawn"].as_array().unwrap().len(),
+        Sampling::default().grid,
+        "the default grid"
+    );
+    assert!(json["scores"]["energy"].as_f64().unwrap() > 0.0);
+    // The strip: the truth, the mean and 3 futures, 8 frames each.
+    let strips = image::open(out.join("strips.png")).unwrap();
+    assert_eq!((strips.width(), strips.height()), (8 * 64, 5 * 64));
+    let csv = std::fs::read_to_string(out.join("samples.csv")).unwrap();
+    assert!(
+        csv.starts_with("sample,step,time,\"joint 0\""),
+        "{}",
+        &csv[..80]
+    );
+    assert_eq!(csv.lines().count(), 1 + 4 * steps);
+    // The same seed, the same file.
+    let again = tmp.path().join("again");
+    assert!(run(&[], &again).status.success());
+    assert_eq!(
+        std::fs::read(out.join("samples.json")).unwrap(),
+        std::fs::read(again.join("samples.json")).unwrap()
+    );
+    // Bad settings: an error that names them, nothing written.
+    let bad = tmp.path().join("bad");
+    for (extra, needle) in [
+        (&["--samples", "0"][..], "samples"),
+        (&["--grid", "0"][..], "grid"),
+        (&["--order", "backwards"][..], "left-to-right or random"),
+    ] {
+        let o = run(extra, &bad);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            !o.status.success() && err.contains(needle),
+            "{extra:?}: {err}"
+        );
+        assert!(!bad.exists(), "{extra:?} wrote {}", bad.display());
+    }
+    let all: Vec<String> = (0..steps).map(|k| k.to_string()).collect();
+    let o = dmbn(&[
+        "sample",
+        "--model",
+        model.to_str().unwrap(),
+        "--data",
+        data.to_str().unwrap(),
+        "--sequence",
+        "0/move",
+        "--observe",
+        &all.join(","),
+        "--out",
+        bad.to_str().unwrap(),
+    ]);
+    assert!(String::from_utf8_lossy(&o.stderr).contains("nothing is left to imagine"));
+}
+
+#[test]
+fn dmbn_imitate_samples_reports_validity_and_coverage() {
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("data");
+    support::simulated_dataset(&data, [0, 1], &Action::ALL, 610_000);
+    let json = tmp.path().join("imitate.json");
+    let o = dmbn(&[
+        "imitate",
+        "--model",
+        support::asset("models/attn-sim.dmbn").to_str().unwrap(),
+        "--data",
+        data.to_str().unwrap(),
+        "--task",
+        "finish",
+        "--samples",
+        "2",
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    let said = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        o.status.success(),
+        "{said}{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(said.contains("| validity | coverage |"), "{said}");
+    let report: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    let rows = report[0]["futures"]["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 2, "a row per action");
+    for row in rows {
+        assert_eq!(row["demonstrations"], 2);
+        assert_eq!(row["performed"], 4);
+        let v = row["validity"].as_f64().unwrap();
+        assert!((0.0..=1.0).contains(&v));
+    }
+    assert_eq!(
+        report[0]["future_performances"].as_array().unwrap().len(),
+        8
+    );
+}
