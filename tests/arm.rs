@@ -156,3 +156,85 @@ fn simulate_arm_panda_writes_eight_column_joint_files() {
     assert_eq!(bad.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&bad.stderr).contains("\"ur5\" or \"panda\""));
 }
+
+#[test]
+fn the_panda_s_data_goes_through_train_score_and_imitate() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (data, run) = (tmp.path().join("panda"), tmp.path().join("run"));
+    let exe = |bin: &str, args: &[&str]| {
+        let path = match bin {
+            "train" => env!("CARGO_BIN_EXE_train"),
+            _ => env!("CARGO_BIN_EXE_dmbn"),
+        };
+        let o = Command::new(path).args(args).output().unwrap();
+        let said = format!(
+            "{bin} {args:?}: {}{}",
+            String::from_utf8_lossy(&o.stdout),
+            String::from_utf8_lossy(&o.stderr)
+        );
+        assert!(o.status.success(), "{said}");
+        said
+    };
+    let (d, r) = (data.to_str().unwrap(), run.to_str().unwrap());
+    exe(
+        "dmbn",
+        &[
+            "simulate",
+            "--arm",
+            "panda",
+            "--sequences",
+            "3",
+            "--seed",
+            "5",
+            "--out",
+            d,
+        ],
+    );
+    exe(
+        "train",
+        &[
+            "--data",
+            d,
+            "--out",
+            r,
+            "--model",
+            "pte",
+            "--steps",
+            "2",
+            "--batch",
+            "2",
+            "--val-every",
+            "2",
+            "--val-fraction",
+            "0.34",
+            "--quality-sequences",
+            "0",
+        ],
+    );
+    let model = run.join("model.dmbn");
+    let header = dmbn::model::read_header(&std::fs::read(&model).unwrap()).unwrap();
+    assert_eq!(header.config.joint_count(), 8);
+    let m = model.to_str().unwrap();
+    let score = exe(
+        "dmbn",
+        &[
+            "score",
+            "--model",
+            m,
+            "--data",
+            d,
+            "--ids",
+            "2-2",
+            "--samples",
+            "2",
+        ],
+    );
+    assert!(score.contains("energy score"), "{score}");
+    let imitate = exe(
+        "dmbn",
+        &[
+            "imitate", "--model", m, "--data", d, "--ids", "2-2", "--task", "frames",
+        ],
+    );
+    assert!(imitate.contains("ceiling: recorded joints"), "{imitate}");
+}

@@ -9,8 +9,8 @@ use serde::Serialize;
 
 use dmbn::data::{Joints, Sequence};
 use dmbn::figure::{joint_plot, save_png, JointPlot};
-use dmbn::futures::{draw_futures, FutureScores, Sampling};
-use dmbn::predict::{Observations, Predictor};
+use dmbn::futures::{draw_futures, Future, FutureScores, Sampling};
+use dmbn::predict::{Observations, Predictor, SequencePrediction};
 
 use crate::args::{Observing, SamplingArgs};
 use crate::error::CliError;
@@ -178,8 +178,8 @@ fn spaced(steps: &[usize], n: usize) -> Vec<usize> {
 fn strips(
     predictor: &Predictor,
     seq: &Sequence,
-    futures: &[dmbn::futures::Future],
-    mean: &dmbn::predict::SequencePrediction,
+    futures: &[Future],
+    mean: &SequencePrediction,
     steps: &[usize],
 ) -> Result<RgbImage, CliError> {
     let s = seq.image_size;
