@@ -4,12 +4,16 @@
 //! refuses bad settings; `dmbn imitate --samples` performs them.
 #![cfg(not(target_arch = "wasm32"))]
 
+#[path = "golden/futures.rs"]
+mod golden_futures;
 mod support;
 
 use std::process::{Command, Output};
 
 use dmbn::data::Joints;
-use dmbn::futures::{draw_futures, sample_trajectories, FutureScores, Order, Sampling};
+use dmbn::futures::{
+    draw_futures, sample_trajectories, sample_unobserved, FutureScores, Order, Sampling,
+};
 use dmbn::imitate::{imitate_futures, Task};
 use dmbn::predict::{Observations, Predictor};
 use dmbn::sim::{episode, Action};
@@ -290,4 +294,49 @@ fn dmbn_imitate_samples_reports_validity_and_coverage() {
         report[0]["future_performances"].as_array().unwrap().len(),
         8
     );
+}
+
+/// The golden case's observations (the first 30% at 3 steps) and every step's time.
+fn golden_case() -> (dmbn::data::Sequence, Observations, Vec<f32>) {
+    let demo = episode(Action::Move, golden_futures::SEED, 64).unwrap();
+    let steps = Task::Finish.steps(demo.len(), 5).unwrap();
+    let observations = Observations::from_sequence(&demo, &steps.observed).unwrap();
+    let times = demo.times();
+    (demo, observations, times)
+}
+
+#[test]
+fn the_page_s_default_model_samples_the_golden_futures() {
+    // tests/web.rs: `Model.sample` in wasm gives the same within 1e-4.
+    let p = Predictor::from_bytes(golden_futures::MODEL).unwrap();
+    let (_, observations, times) = golden_case();
+    let sampling = Sampling {
+        samples: golden_futures::SAMPLES,
+        seed: golden_futures::SAMPLE_SEED,
+        ..Sampling::default()
+    };
+    let observed = p.encode_contexts(&observations).unwrap();
+    let futures =
+        sample_unobserved(&p, &observed, &times, golden_futures::BLEND, &sampling).unwrap();
+    let got: Vec<f32> = futures.iter().flat_map(|f| f.values().to_vec()).collect();
+    if std::env::var_os("DMBN_BLESS").is_some() {
+        let path =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/golden/futures.json");
+        std::fs::write(path, serde_json::to_string(&got).unwrap()).unwrap();
+        return;
+    }
+    let want = golden_futures::expected();
+    assert_eq!(got.len(), want.len());
+    let worst = got
+        .iter()
+        .zip(&want)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f32::max);
+    assert!(
+        worst <= 1e-6,
+        "the futures moved from the golden ones by {worst}"
+    );
+    // Every target observed: nothing to imagine, said so.
+    let err = sample_unobserved(&p, &observed, &observations.times, 0.5, &sampling).unwrap_err();
+    assert!(err.to_string().contains("only observed times"), "{err}");
 }

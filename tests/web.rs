@@ -3,6 +3,8 @@
 #![cfg(target_arch = "wasm32")]
 
 mod golden;
+#[path = "golden/futures.rs"]
+mod golden_futures;
 #[path = "golden/imitation.rs"]
 mod golden_imitation;
 #[path = "golden/prediction.rs"]
@@ -247,9 +249,13 @@ fn bad_arguments_throw() {
 
 /// The golden prediction's inputs as the page passes them: observed frames, joints and times.
 fn observed(ep: &Episode) -> (Vec<u8>, Vec<f32>, Vec<f32>) {
+    observed_at(ep, &golden_prediction::OBSERVE)
+}
+
+/// Steps `steps` of `ep` as the page passes them: frames, joints and times.
+fn observed_at(ep: &Episode, steps: &[usize]) -> (Vec<u8>, Vec<f32>, Vec<f32>) {
     let n = 64 * 64 * 3;
     let (frames, joints, times) = (ep.frames(), ep.joints(), ep.times());
-    let steps = golden_prediction::OBSERVE;
     (
         steps
             .iter()
@@ -285,6 +291,40 @@ fn golden_prediction() -> (Episode, Prediction) {
         )
         .expect("valid inputs");
     (ep, prediction)
+}
+
+#[wasm_bindgen_test]
+fn sampled_futures_match_native_within_1e_4() {
+    let model = ModelHandle::from_bytes(u8s(golden_futures::MODEL)).unwrap();
+    let ep = run_episode("move".into(), num(golden_futures::SEED as f64), num(64.0)).unwrap();
+    let steps = dmbn::imitate::Task::Finish.steps(ep.steps(), 5).unwrap();
+    let (frames, joints, times) = observed_at(&ep, &steps.observed);
+    let contexts = model
+        .encode_contexts(u8s(&frames), f32s(&joints), f32s(&times))
+        .unwrap();
+    let sample = |samples: f64, seed: f64| {
+        model.sample(
+            &contexts,
+            f32s(&ep.times()),
+            num(golden_futures::BLEND.into()),
+            num(samples),
+            num(seed),
+        )
+    };
+    let got = sample(
+        golden_futures::SAMPLES as f64,
+        golden_futures::SAMPLE_SEED as f64,
+    )
+    .unwrap();
+    let want = golden_futures::expected();
+    assert_eq!(got.len(), golden_futures::SAMPLES * ep.steps() * 7);
+    let (diff, at) = golden_prediction::max_diff(&got, &want);
+    assert!(
+        diff < 1e-4,
+        "wasm and native futures differ by {diff} at {at}"
+    );
+    let err = message(sample(0.0, 1.0).err().unwrap());
+    assert!(err.contains("samples"), "{err}");
 }
 
 #[wasm_bindgen_test]

@@ -3,7 +3,7 @@ use rand_pcg::Pcg64;
 
 use super::{FutureScores, Order, Sampling};
 use crate::data::{Joints, Sequence};
-use crate::model::ModelError;
+use crate::model::{EncodedContexts, ModelError};
 use crate::predict::{Encoding, Observations, Predictor};
 
 /// One sampled future: what the decoders condition on once its steps are drawn, and the draws.
@@ -29,6 +29,19 @@ pub fn draw_futures(
     blend: f32,
     sampling: &Sampling,
 ) -> Result<Vec<Future>, ModelError> {
+    let observed = predictor.encode_contexts(observations)?;
+    draw_futures_from(predictor, &observed, target_times, blend, sampling)
+}
+
+/// [`draw_futures`] from observations already encoded (`Predictor::encode_contexts`; the
+/// page's workers keep each observation's).
+pub fn draw_futures_from(
+    predictor: &Predictor,
+    observed: &EncodedContexts,
+    target_times: &[f32],
+    blend: f32,
+    sampling: &Sampling,
+) -> Result<Vec<Future>, ModelError> {
     sampling.validate()?;
     if target_times.is_empty() {
         return Err(ModelError::observation(
@@ -36,7 +49,7 @@ pub fn draw_futures(
             "is empty: expected the steps to imagine",
         ));
     }
-    let observed = predictor.encode_contexts(observations)?;
+    let image_size = predictor.model().image_size();
     let grid = grid(target_times, sampling.grid);
     (0..sampling.samples)
         .map(|s| {
@@ -62,7 +75,7 @@ pub fn draw_futures(
                     .map(|(m, s)| m + sampling.temperature * s * standard_normal(&mut rng))
                     .collect();
                 let step = Observations {
-                    image_size: observations.image_size,
+                    image_size,
                     frames: here.mean_frame(0),
                     joints: joints.clone(),
                     times: vec![t],
@@ -91,6 +104,33 @@ pub fn sample_trajectories(
     draw_futures(predictor, observations, future, blend, sampling)?
         .iter()
         .map(|f| predictor.decode_joints(&f.encoding, times))
+        .collect()
+}
+
+/// The joint rows at `target_times` of S futures of the encoded observations `observed`,
+/// drawn over the targets that are not an observed time (`Model.sample` in wasm). Fails when
+/// every target is observed: nothing is left to imagine.
+pub fn sample_unobserved(
+    predictor: &Predictor,
+    observed: &EncodedContexts,
+    target_times: &[f32],
+    blend: f32,
+    sampling: &Sampling,
+) -> Result<Vec<Joints>, ModelError> {
+    let times = observed.observed_times();
+    let future: Vec<f32> = (target_times.iter())
+        .filter(|t| !times.contains(t))
+        .copied()
+        .collect();
+    if future.is_empty() {
+        return Err(ModelError::observation(
+            "target_times",
+            "holds only observed times: expected steps to imagine",
+        ));
+    }
+    draw_futures_from(predictor, observed, &future, blend, sampling)?
+        .iter()
+        .map(|f| predictor.decode_joints(&f.encoding, target_times))
         .collect()
 }
 

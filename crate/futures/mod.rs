@@ -14,6 +14,8 @@ mod autoregressive;
 mod energy_score;
 mod sampling;
 
-pub use autoregressive::{draw_futures, sample_trajectories, score_futures, Future};
+pub use autoregressive::{
+    draw_futures, draw_futures_from, sample_trajectories, sample_unobserved, score_futures, Future,
+};
 pub use energy_score::{EnergyScore, FutureScoreRow, FutureScoreSums, FutureScores};
 pub use sampling::{Order, Sampling};

@@ -21,7 +21,7 @@ pub struct EncodedContexts {
     times: Tensor<2>,
     /// `[B, N, 3, S, S]`: context frames (the attentive model's decoders start from them).
     frames: Tensor<5>,
-    /// `[B, N, 7]`: context joints, normalised.
+    /// `[B, N, D]`: context joints, normalised.
     joints: Tensor<3>,
 }
 
@@ -85,6 +85,16 @@ impl EncodedContexts {
     /// `[B, N]`: context times.
     pub fn times(&self) -> &Tensor<2> {
         &self.times
+    }
+
+    /// The times of the real contexts (padding left out), sequence after sequence.
+    pub fn observed_times(&self) -> Vec<f32> {
+        let (times, mask) = (
+            super::values(self.times.clone()),
+            super::values(self.mask.clone()),
+        );
+        let real = times.iter().zip(&mask).filter(|(_, &m)| m > 0.0);
+        real.map(|(&t, _)| t).collect()
     }
 
     /// `[B, N, 3, S, S]`: context frames.

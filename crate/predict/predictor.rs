@@ -124,16 +124,7 @@ impl Predictor {
             TensorData::new(vec![blend; contexts.batch()], [contexts.batch()]),
             &self.device,
         );
-        let (times, mask) = (
-            model::values(contexts.times().clone()),
-            model::values(contexts.mask().clone()),
-        );
-        let observed: Vec<f32> = times
-            .iter()
-            .zip(&mask)
-            .filter(|(_, &m)| m > 0.0)
-            .map(|(&t, _)| t)
-            .collect();
+        let observed = contexts.observed_times();
         let span = observed
             .iter()
             .fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), &t| {

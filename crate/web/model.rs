@@ -4,11 +4,12 @@ use wasm_bindgen::prelude::*;
 
 use serde::Serialize;
 
-use super::argument::{self, action, blend, bytes, choice, floats, index, observations};
+use super::argument::{self, action, blend, bytes, choice, floats, index, observations, seed};
 use super::contexts::Contexts;
 use super::encoding::Encoding;
 use super::imitation::Imitation;
 use super::Episode;
+use crate::futures::{sample_unobserved, Sampling};
 use crate::imitate::{self, Task};
 use crate::predict::{Observations, Predictor, SequencePrediction};
 use crate::quality::{score_sequence, Quality, Scenario};
@@ -94,6 +95,40 @@ impl ModelHandle {
         })
     }
 
+    /// S sampled futures at `targetTimes` of the observations `contexts` (`encodeContexts`;
+    /// autoregressive sampling, as `dmbn sample`, with its default grid, order and τ) with
+    /// `blend`: a `Float32Array(S × T × D)`, future by future, a row of D joint means per
+    /// target. The steps drawn are the targets that are not an observed time; future s is the
+    /// same for a `seed` whatever `samples` (1 to 256). Throws on bad input, contexts of another
+    /// model, or targets that are all observed.
+    pub fn sample(
+        &self,
+        contexts: &Contexts,
+        #[wasm_bindgen(js_name = targetTimes, unchecked_param_type = "Float32Array")]
+        target_times: JsValue,
+        #[wasm_bindgen(js_name = blend, unchecked_param_type = "number")] blend_value: JsValue,
+        #[wasm_bindgen(unchecked_param_type = "number")] samples: JsValue,
+        #[wasm_bindgen(js_name = seed, unchecked_param_type = "number")] seed_value: JsValue,
+    ) -> Result<Vec<f32>, JsError> {
+        self.check_contexts(contexts)?;
+        let target_times = floats(&target_times, "targetTimes")?;
+        let blend = blend(&blend_value)?;
+        let samples = argument::integer(&samples, "samples", 1, Sampling::MAX_SAMPLES as u64)?;
+        let sampling = Sampling {
+            samples: samples as usize,
+            seed: seed(&seed_value)?,
+            ..Sampling::default()
+        };
+        let futures = sample_unobserved(
+            &self.inner,
+            &contexts.inner,
+            &target_times,
+            blend,
+            &sampling,
+        )?;
+        Ok(futures.iter().flat_map(|f| f.values().to_vec()).collect())
+    }
+
     /// Encodes N observed steps, with the arguments of `predict` (without the target times),
     /// for `decode`. Throws on bad input.
     pub fn encode(
@@ -136,11 +171,7 @@ impl ModelHandle {
         #[wasm_bindgen(js_name = blend, unchecked_param_type = "number")] blend_value: JsValue,
     ) -> Result<Encoding, JsError> {
         let blend = blend(&blend_value)?;
-        if contexts.model != self.id {
-            return Err(JsError::new(
-                "these contexts were encoded by another model: encode the observations with this one",
-            ));
-        }
+        self.check_contexts(contexts)?;
         Ok(Encoding {
             inner: self.inner.represent(&contexts.inner, blend)?,
             model: self.id,
@@ -243,6 +274,16 @@ struct ScoreValue {
 }
 
 impl ModelHandle {
+    /// Fails unless this model encoded `contexts`.
+    fn check_contexts(&self, contexts: &Contexts) -> Result<(), JsError> {
+        if contexts.model != self.id {
+            return Err(JsError::new(
+                "these contexts were encoded by another model: encode the observations with this one",
+            ));
+        }
+        Ok(())
+    }
+
     /// The observations of `predict`, `encode` and `encodeContexts` from their JS arguments.
     fn observations(
         &self,

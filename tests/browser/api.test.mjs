@@ -134,6 +134,11 @@ const ENTRIES = {
     args: () => [v.frames, v.joints, v.times, v.targets, 0.5],
     params: ["frames", "joints", "times", "targetTimes", "blend"],
   },
+  "Model.sample": {
+    call: (a) => v.model.sample(...a),
+    args: () => [v.contexts, v.targets, 0.5, 2, 3],
+    params: [["contexts", "Contexts"], "targetTimes", "blend", "samples", "seed"],
+  },
   "Model.represent": { call: (a) => v.model.represent(...a), args: () => [v.contexts, 0.5], params: [["contexts", "Contexts"], "blend"] },
   "Model.score": {
     call: (a) => v.model.score(...a),
