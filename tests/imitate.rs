@@ -369,6 +369,22 @@ fn dmbn_imitate_prints_tables_and_writes_json() {
         "{floor}"
     );
 
+    // finish observes its first 30% at 3 steps: --observations with it is refused, not ignored.
+    let err = Command::new(env!("CARGO_BIN_EXE_dmbn"))
+        .args(["imitate", "--model"])
+        .arg(support::asset("models/dmbn-sim.dmbn"))
+        .arg("--data")
+        .arg(&data)
+        .args(["--task", "finish", "--observations", "7"])
+        .output()
+        .unwrap();
+    assert!(!err.status.success());
+    let said = String::from_utf8_lossy(&err.stderr);
+    assert!(
+        said.contains("--observations 7: the finish task observes"),
+        "{said}"
+    );
+
     // A noise that is no RMSE.
     let err = Command::new(env!("CARGO_BIN_EXE_dmbn"))
         .args(["imitate", "--model"])

@@ -46,9 +46,10 @@ pub struct ImitateArgs {
     #[arg(long, value_parser = parse_ids)]
     ids: Option<(u32, u32)>,
     /// Frames observed per demonstration in `frames` (K ≥ 2, evenly spaced, first and last
-    /// included).
-    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(2..))]
-    observations: u32,
+    /// included; default 5). `finish` always observes its first 30% at 3 steps, so with
+    /// `--task finish` this is refused.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(2..))]
+    observations: Option<u32>,
     /// Which task.
     #[arg(long, value_enum, default_value = "all")]
     task: TaskArg,
@@ -175,7 +176,13 @@ pub fn run(args: ImitateArgs) -> Result<(), CliError> {
         TaskArg::Finish => vec![Task::Finish],
         TaskArg::All => Task::ALL.to_vec(),
     };
-    let k = args.observations as usize;
+    if let (TaskArg::Finish, Some(k)) = (args.task, args.observations) {
+        return Err(CliError::Usage(format!(
+            "--observations {k}: the finish task observes the first 30% of each demonstration at \
+             3 steps; --observations sets the frames task's evenly spaced frames"
+        )));
+    }
+    let k = args.observations.unwrap_or(5) as usize;
     // Rows: the ceiling, the floor, the noisy replays, then the models in order.
     let names: Vec<String> = [CEILING.to_string(), FLOOR.to_string()]
         .into_iter()
