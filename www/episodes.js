@@ -5,7 +5,7 @@ import { IMAGE_SIZE } from "./config.js";
 import { drawTableMap } from "./draw.js";
 import { log, timings } from "./hooks.js";
 import { describe } from "./imitate.js";
-import { chooseRandom, clampInt, mulberry32, updateObsInfo } from "./observations.js";
+import { chooseEven, chooseRandom, clampInt, mulberry32, updateObsInfo } from "./observations.js";
 import { play, show } from "./playback.js";
 import { cancelPrediction } from "./prediction.js";
 import { state } from "./state.js";
@@ -79,9 +79,13 @@ export function setEpisode(ep, { action, seed, placed, ms, folder }) {
   ui.objectInfo.title = `episode sha256 ${episode.digest}`;
   drawTableMap();
   // Keep the chosen steps that the new episode has; otherwise "random k", seeded by the seed.
-  state.observed = new Set([...(state.pendingObserved ?? state.observed)].filter((k) => k < len));
+  // Imitate mode observes k evenly spaced frames, as the benchmark does, on every new episode.
+  const imitate = ui.mode.value === "imitate";
+  const kept = state.pendingObserved ?? (imitate ? [] : state.observed);
+  state.observed = new Set([...kept].filter((k) => k < len));
   state.pendingObserved = null;
-  if (!state.observed.size) chooseRandom(Number(ui.k.value), mulberry32(seed >>> 0));
+  if (!state.observed.size && imitate) chooseEven(ui.k.value);
+  else if (!state.observed.size) chooseRandom(Number(ui.k.value), mulberry32(seed >>> 0));
   updateObsInfo();
   buildShown();
   ui.scrubber.max = String(len - 1);

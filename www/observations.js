@@ -1,4 +1,4 @@
-// The observed steps: choosing them (first k, random k) and listing them.
+// The observed steps: choosing them (first k, random k, evenly spaced k) and listing them.
 
 import { state } from "./state.js";
 import { ui } from "./ui.js";
@@ -22,6 +22,17 @@ export function clampInt(v, lo, hi) {
 export function chooseFirst(k) {
   const n = clampInt(k, 1, state.episode.len);
   state.observed = new Set(Array.from({ length: n }, (_, i) => i));
+}
+
+/**
+ * k steps evenly spaced over the episode, the first and the last included: what `dmbn imitate`
+ * observes (imitate mode's default).
+ */
+export function chooseEven(k) {
+  const len = state.episode.len;
+  const n = clampInt(k, 1, len);
+  const at = (i) => (n === 1 ? len - 1 : Math.round((i * (len - 1)) / (n - 1)));
+  state.observed = new Set(Array.from({ length: n }, (_, i) => at(i)));
 }
 
 export function chooseRandom(k, rand = Math.random) {

@@ -8,7 +8,7 @@ import { droppedFiles, openFolder, pickedFiles, sequenceChosen } from "./folder.
 import { toggleDemonstration } from "./imitate.js";
 import { compareModels, forecastNow, takeRule } from "./live.js";
 import { selectModel } from "./models.js";
-import { chooseFirst, chooseRandom, updateObsInfo } from "./observations.js";
+import { chooseEven, chooseFirst, chooseRandom, updateObsInfo } from "./observations.js";
 import { pause, play, show, toggle } from "./playback.js";
 import { cancelPrediction, predict } from "./prediction.js";
 import { state } from "./state.js";
@@ -113,8 +113,12 @@ export function wire() {
   const modeChanged = () => {
     if (!state.episode) return;
     const wasLive = state.shown?.mode === "live";
-    // The mirror sees frames only unless the viewer says otherwise.
-    if (ui.mode.value === "imitate" && state.shown?.mode !== "imitate") ui.observe.value = "images";
+    // The mirror sees frames only unless the viewer says otherwise, k evenly spaced ones (the
+    // benchmark's).
+    if (ui.mode.value === "imitate" && state.shown?.mode !== "imitate") {
+      ui.observe.value = "images";
+      chooseEven(ui.k.value);
+    }
     if (buildShown()) {
       clearError();
       updateObsInfo();

@@ -48,7 +48,29 @@ function replayedInPage(page, step) {
   }, step);
 }
 
+/** The observed steps the page's URL names. */
+const obsOf = (page) => new URL(page.url()).searchParams.get("obs");
+/** k steps evenly spaced over `len`, the first and the last included (the benchmark's). */
+const even = (len, k = 5) => Array.from({ length: k }, (_, i) => Math.round((i * (len - 1)) / (k - 1))).join(",");
+
 describe("imitate mode", () => {
+  test("observes 5 evenly spaced frames by default, as the benchmark does", async () => {
+    const page = await open(`${server.url}www/?mode=imitate&action=grasp&seed=11`);
+    await waitState(page, "ready");
+    const len = Number(await page.getAttribute("#scrubber", "max")) + 1;
+    assert.equal(obsOf(page), even(len));
+    // Entering imitate mode from another mode chooses them too.
+    const other = await open(`${server.url}www/?action=move&seed=3&obs=1,2,3`);
+    await waitState(other, "ready");
+    const otherLen = Number(await other.getAttribute("#scrubber", "max")) + 1;
+    await other.selectOption("#mode", "imitate");
+    await other.waitForFunction(() => /obs=0/.test(location.search));
+    assert.equal(obsOf(other), even(otherLen));
+    assert.equal(await other.inputValue("#observe"), "images");
+    await close(other);
+    await close(page);
+  });
+
   test("the robot performs the joints it imagined from frames alone, and the outcome is shown", async () => {
     const { page, len } = await openImitate();
     // Frames only by default, the σ overlay replaced by the mirror's panel.
