@@ -4,6 +4,7 @@
 use std::process::Command;
 
 mod golden;
+mod support;
 
 use dmbn::data::{read_joints, Disk};
 use dmbn::sim::{
@@ -190,27 +191,11 @@ fn the_panda_s_data_goes_through_train_score_and_imitate() {
             d,
         ],
     );
-    exe(
-        "train",
-        &[
-            "--data",
-            d,
-            "--out",
-            r,
-            "--model",
-            "pte",
-            "--steps",
-            "2",
-            "--batch",
-            "2",
-            "--val-every",
-            "2",
-            "--val-fraction",
-            "0.34",
-            "--quality-sequences",
-            "0",
-        ],
-    );
+    let train: Vec<&str> = ["--data", d, "--out", r]
+        .into_iter()
+        .chain(support::TRAIN_TWO_STEPS)
+        .collect();
+    exe("train", &train);
     let model = run.join("model.dmbn");
     let header = dmbn::model::read_header(&std::fs::read(&model).unwrap()).unwrap();
     assert_eq!(header.config.joint_count(), 8);

@@ -105,17 +105,7 @@ fn converted_datasets_train_and_score() {
                 "--out",
                 run.to_str().unwrap(),
             ])
-            .args([
-                "--model",
-                "pte",
-                "--steps",
-                "2",
-                "--batch",
-                "2",
-                "--val-every",
-                "2",
-            ])
-            .args(["--val-fraction", "0.34", "--quality-sequences", "0"])
+            .args(support::TRAIN_TWO_STEPS)
             .output()
             .unwrap();
         assert!(train.status.success(), "{}", said(&train));

@@ -369,49 +369,33 @@ fn dmbn_imitate_prints_tables_and_writes_json() {
         "{floor}"
     );
 
+    // Refused settings: the command fails and says why (stderr).
+    let refused = |extra: &[&str]| {
+        let err = Command::new(env!("CARGO_BIN_EXE_dmbn"))
+            .args(["imitate", "--model"])
+            .arg(support::asset("models/dmbn-sim.dmbn"))
+            .arg("--data")
+            .arg(&data)
+            .args(extra)
+            .output()
+            .unwrap();
+        assert!(!err.status.success(), "{extra:?} was accepted");
+        String::from_utf8_lossy(&err.stderr).into_owned()
+    };
     // finish observes its first 30% at 3 steps: --observations with it is refused, not ignored.
-    let err = Command::new(env!("CARGO_BIN_EXE_dmbn"))
-        .args(["imitate", "--model"])
-        .arg(support::asset("models/dmbn-sim.dmbn"))
-        .arg("--data")
-        .arg(&data)
-        .args(["--task", "finish", "--observations", "7"])
-        .output()
-        .unwrap();
-    assert!(!err.status.success());
-    let said = String::from_utf8_lossy(&err.stderr);
+    let said = refused(&["--task", "finish", "--observations", "7"]);
     assert!(
         said.contains("--observations 7: the finish task observes"),
         "{said}"
     );
-
     // A noise that is no RMSE.
-    let err = Command::new(env!("CARGO_BIN_EXE_dmbn"))
-        .args(["imitate", "--model"])
-        .arg(support::asset("models/dmbn-sim.dmbn"))
-        .arg("--data")
-        .arg(&data)
-        .args(["--noise", "2"])
-        .output()
-        .unwrap();
-    assert!(!err.status.success());
-    let stderr = String::from_utf8_lossy(&err.stderr);
+    let stderr = refused(&["--noise", "2"]);
     assert!(
         stderr.contains("expected a joint RMSE in radians"),
         "{stderr}"
     );
-
     // No sequence in the ids asked for.
-    let err = Command::new(env!("CARGO_BIN_EXE_dmbn"))
-        .args(["imitate", "--model"])
-        .arg(support::asset("models/dmbn-sim.dmbn"))
-        .arg("--data")
-        .arg(&data)
-        .args(["--ids", "7-9"])
-        .output()
-        .unwrap();
-    assert!(!err.status.success());
-    assert!(String::from_utf8_lossy(&err.stderr).contains("no sequence with an id in"));
+    assert!(refused(&["--ids", "7-9"]).contains("no sequence with an id in"));
 }
 
 #[test]

@@ -101,9 +101,19 @@ pub fn sample_trajectories(
     blend: f32,
     sampling: &Sampling,
 ) -> Result<Vec<Joints>, ModelError> {
-    draw_futures(predictor, observations, future, blend, sampling)?
-        .iter()
-        .map(|f| predictor.decode_joints(&f.encoding, times))
+    let futures = draw_futures(predictor, observations, future, blend, sampling)?;
+    trajectories(predictor, &futures, times)
+}
+
+/// The joint rows at `times` of each of `futures`: its mean given the observations and its
+/// draws.
+pub fn trajectories(
+    predictor: &Predictor,
+    futures: &[Future],
+    times: &[f32],
+) -> Result<Vec<Joints>, ModelError> {
+    let rows = futures.iter();
+    rows.map(|f| predictor.decode_joints(&f.encoding, times))
         .collect()
 }
 
@@ -128,10 +138,8 @@ pub fn sample_unobserved(
             "holds only observed times: expected steps to imagine",
         ));
     }
-    draw_futures_from(predictor, observed, &future, blend, sampling)?
-        .iter()
-        .map(|f| predictor.decode_joints(&f.encoding, target_times))
-        .collect()
+    let futures = draw_futures_from(predictor, observed, &future, blend, sampling)?;
+    trajectories(predictor, &futures, target_times)
 }
 
 /// S futures of `seq` from its `observed` steps scored against it at the `imagined` ones
@@ -144,11 +152,13 @@ pub fn score_futures(
     blend: f32,
     sampling: &Sampling,
 ) -> Result<FutureScores, ModelError> {
-    let observations = Observations::from_sequence(seq, observed)?;
+    // The observations encoded once: for the futures and for the single mean.
+    let observed = predictor.encode_contexts(&Observations::from_sequence(seq, observed)?)?;
     let times = seq.times();
     let at: Vec<f32> = imagined.iter().map(|&k| times[k]).collect();
-    let futures = sample_trajectories(predictor, &observations, &at, &at, blend, sampling)?;
-    let mean = predictor.predict_joints(&observations, &at, blend)?;
+    let futures = draw_futures_from(predictor, &observed, &at, blend, sampling)?;
+    let futures = trajectories(predictor, &futures, &at)?;
+    let mean = predictor.decode_joints(&predictor.represent(&observed, blend)?, &at)?;
     let truth = Joints::from_slices(seq.joints.width(), imagined.iter().map(|&k| &seq.joints[k]));
     let all: Vec<usize> = (0..imagined.len()).collect();
     Ok(FutureScores::of(&futures, &mean, &truth, &all))

@@ -84,7 +84,16 @@ impl Sampling {
     /// At most this many drawn steps per future.
     pub const MAX_GRID: usize = 64;
 
-    /// Fails unless 1 ≤ S ≤ [`Sampling::MAX_SAMPLES`] and 1 ≤ G ≤ [`Sampling::MAX_GRID`].
+    /// The same sampling drawn from seed + `offset` (each sequence of a set its own draws).
+    pub fn reseeded(&self, offset: u64) -> Sampling {
+        Sampling {
+            seed: self.seed.wrapping_add(offset),
+            ..*self
+        }
+    }
+
+    /// Fails unless 1 ≤ S ≤ [`Sampling::MAX_SAMPLES`], 0 ≤ τ ≤ 4 and 1 ≤ G ≤
+    /// [`Sampling::MAX_GRID`].
     pub fn validate(&self) -> Result<(), ModelError> {
         if !(1..=Self::MAX_SAMPLES).contains(&self.samples) {
             return Err(ModelError::observation(

@@ -55,8 +55,11 @@ impl Outcome {
     /// A grasp succeeds when, lifted, the object ends this close to the demonstration's final
     /// position (it was carried where the demonstration carried it).
     pub const CARRY_CM: f32 = 5.0;
-    /// A valid push moves the object at least this far: the least any scripted push moves it.
-    pub const PUSH_TRAVEL_CM: f32 = PUSH_TRAVEL_CM;
+    /// A valid push moves the object at least this far, cm: the least any scripted push moves
+    /// it (the script moves the gripper 12-22 cm from a start behind the object, which travels
+    /// 2-3 cm less; least over 150 demonstrations of each arm, seeds 900000-900149: UR5 10.3,
+    /// Panda 9.6).
+    pub const PUSH_TRAVEL_CM: f32 = 9.5;
     /// A valid push moves the object within this angle of the demonstration's direction.
     pub const PUSH_DIRECTION_DEG: f32 = 10.0;
     /// An object on the table whose centre moved this far up or down fell over (the cylinder
@@ -153,11 +156,6 @@ impl Outcome {
         }
     }
 }
-
-/// The least horizontal travel of the object over the scripted pushes, cm: the script moves
-/// the gripper 12-22 cm from a start behind the object, which travels 2-3 cm less (least over
-/// 150 demonstrations of each arm, seeds 900000-900149: UR5 10.3, Panda 9.6).
-const PUSH_TRAVEL_CM: f32 = 9.5;
 
 /// Horizontal distance between `a` and `b`.
 fn horizontal(a: &[f32; 3], b: &[f32; 3]) -> f32 {

@@ -116,6 +116,23 @@ pub fn simulated_arm_dataset(
     writer.finish().unwrap();
 }
 
+/// `train`'s settings for a run that only has to end with a model file of the data's shape: a
+/// DMBN-PTE, 2 steps of 2 sequences, a third of a tiny dataset validating, no quality check.
+pub const TRAIN_TWO_STEPS: [&str; 12] = [
+    "--model",
+    "pte",
+    "--steps",
+    "2",
+    "--batch",
+    "2",
+    "--val-every",
+    "2",
+    "--val-fraction",
+    "0.34",
+    "--quality-sequences",
+    "0",
+];
+
 /// Writes `model` as a model file at `path` (what `train` writes).
 pub fn save_model(
     path: &Path,

@@ -223,10 +223,7 @@ pub fn run(args: ImitateArgs) -> Result<(), CliError> {
                 let demo = &by_size[&p.model().image_size()][i].2;
                 performed.push(imitate(p, demo, *action, task, k, blend).map_err(named)?);
                 if let Some(sampling) = &sampling {
-                    let seeded = Sampling {
-                        seed: sampling.seed.wrapping_add(u64::from(*id)),
-                        ..*sampling
-                    };
+                    let seeded = sampling.reseeded(u64::from(*id));
                     let f = imitate_futures(p, demo, *action, task, k, blend, &seeded);
                     futures.push(f.map_err(named)?);
                 }

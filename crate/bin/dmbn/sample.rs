@@ -9,7 +9,7 @@ use serde::Serialize;
 
 use dmbn::data::{Joints, Sequence};
 use dmbn::figure::{joint_plot, save_png, JointPlot};
-use dmbn::futures::{draw_futures, Future, FutureScores, Sampling};
+use dmbn::futures::{draw_futures_from, trajectories, Future, FutureScores, Sampling};
 use dmbn::predict::{Observations, Predictor, SequencePrediction};
 
 use crate::args::{Observing, SamplingArgs};
@@ -75,18 +75,12 @@ pub fn run(args: SampleArgs) -> Result<(), CliError> {
     let sampling = args.sampling.sampling(args.samples);
     let times = seq.times();
     let future: Vec<f32> = imagined.iter().map(|&k| times[k]).collect();
-    let futures = draw_futures(
-        &predictor,
-        &observations,
-        &future,
-        args.observing.blend,
-        &sampling,
-    )?;
-    let joints = futures
-        .iter()
-        .map(|f| predictor.decode_joints(&f.encoding, &times))
-        .collect::<Result<Vec<_>, _>>()?;
-    let mean = predictor.predict(&observations, &times, args.observing.blend)?;
+    // The observations encoded once: for the futures and for the single mean.
+    let observed = predictor.encode_contexts(&observations)?;
+    let blend = args.observing.blend;
+    let futures = draw_futures_from(&predictor, &observed, &future, blend, &sampling)?;
+    let joints = trajectories(&predictor, &futures, &times)?;
+    let mean = predictor.decode(&predictor.represent(&observed, blend)?, &times)?;
     let mean_joints = Joints::new(seq.joints.width(), mean.joint_mean.clone())
         .ok_or_else(|| CliError::Usage("the prediction's joints are not whole rows".into()))?;
     let scores = FutureScores::of(&joints, &mean_joints, &seq.joints, &imagined);

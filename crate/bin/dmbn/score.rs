@@ -142,10 +142,7 @@ pub fn run(args: ScoreArgs) -> Result<(), CliError> {
                 )?;
                 let steps = scenario.steps(seq.len(), observations);
                 if let (Some(sampling), Some(steps)) = (&sampling, steps) {
-                    let seeded = Sampling {
-                        seed: sampling.seed.wrapping_add(i as u64),
-                        ..*sampling
-                    };
+                    let seeded = sampling.reseeded(i as u64);
                     let observed = &steps.observed;
                     let imagined: Vec<usize> = (steps.scored.iter())
                         .filter(|k| !observed.contains(k))
