@@ -1,12 +1,15 @@
 //! The mirror stage: a fresh one predicts the interpolated reads and only frames-only
 //! predictions use it, it survives the model file, bad files are refused, fitting it lowers
-//! the error of the reads' interpolation, and `train --mirror` adds one to a model file.
+//! the error of the reads' interpolation on demonstrations it did not see, the shipped one
+//! beats its network on unseen demonstrations (joints and pushes), and `train --mirror` adds
+//! one to a model file.
 #![cfg(not(target_arch = "wasm32"))]
 
 mod support;
 
-use burn::tensor::Device;
-use dmbn::data::{Joints, Sequence, JOINTS};
+use burn::tensor::{Device, Tensor, TensorData};
+use dmbn::data::{Joints, JOINTS};
+use dmbn::imitate::{imitate, Task};
 use dmbn::model::{self, Mirror, MirrorConfig, ModelError};
 use dmbn::predict::{Observations, Predictor};
 use dmbn::sim::{episode, Action};
@@ -180,48 +183,146 @@ fn interpolation_mse(examples: &MirrorExamples) -> f64 {
     se / examples.truth.len() as f64
 }
 
-#[test]
-fn fitting_the_stage_lowers_the_error_of_the_interpolated_reads() {
-    let plain = network_only();
-    let mut rng = rand_pcg::Pcg64::seed_from_u64(3);
-    let mut examples = MirrorExamples::new(JOINTS);
-    let demos: Vec<Sequence> = (0..4)
-        .flat_map(|i| Action::ALL.map(|a| episode(a, 800 + i, 64).unwrap()))
-        .collect();
-    for demo in &demos {
-        examples.add(&plain, demo, 2, &mut rng).unwrap();
+/// The network's reads of `per_action` demonstrations of each action (simulator seeds `seed`
+/// on), each at `draws` glimpse layouts, as the stage's examples; and the demonstrations'
+/// steps, all layouts counted.
+fn reads_of(
+    plain: &Predictor,
+    seed: u64,
+    per_action: u64,
+    draws: usize,
+) -> (MirrorExamples, usize) {
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
+    let (mut examples, mut steps) = (MirrorExamples::new(JOINTS), 0);
+    for i in 0..per_action {
+        for action in Action::ALL {
+            let demo = episode(action, seed + i, 64).unwrap();
+            examples.add(plain, &demo, draws, &mut rng).unwrap();
+            steps += draws * demo.len();
+        }
     }
-    let most = 2 * demos.iter().map(Sequence::len).sum::<usize>();
+    (examples, steps)
+}
+
+/// The RMSE of `mirror`'s mean joints over `examples` (every joint value).
+fn stage_rmse(mirror: &Mirror, examples: &MirrorExamples, device: &Device) -> f64 {
+    let (rows, d) = (examples.rows(), examples.joints);
+    let tensor = |values: &[f32], width: usize| {
+        Tensor::from_data(TensorData::new(values.to_vec(), [rows, width]), device)
+    };
+    let (mean, _) = mirror.forward(
+        tensor(&examples.x, examples.features()),
+        tensor(&examples.start, d),
+    );
+    let se: f64 = model::values(mean)
+        .iter()
+        .zip(&examples.truth)
+        .map(|(a, b)| ((a - b) as f64).powi(2))
+        .sum();
+    (se / examples.truth.len() as f64).sqrt()
+}
+
+/// Fitting the stage lowers the error of the interpolated reads on demonstrations it never
+/// saw: a small stage (width 32, 400 steps) fitted on the network's reads of 20
+/// demonstrations per action (3 glimpse layouts each) errs on 10 other demonstrations per
+/// action, at layouts of their own, at most 0.8× as much as their reads' interpolation.
+/// Measured (2026-12-07): 0.0586 against 0.1092 rad (0.54×; on its training reads 0.0372
+/// against 0.0713); 0.53-0.70× over six other draws of the layouts. The bar is on unseen
+/// demonstrations because on its training reads any fit looks good: fitted on 4-6
+/// demonstrations per action the stage got to 0.2-0.4× there, but ranged 0.74-1.18× on
+/// unseen ones.
+#[test]
+fn fitting_the_stage_lowers_the_error_of_the_interpolated_reads_on_unseen_demonstrations() {
+    let plain = network_only();
+    let (train, most) = reads_of(&plain, 800, 20, 3);
+    let (held_out, _) = reads_of(&plain, 5_800, 10, 3);
     assert!(
-        examples.rows() > most / 4 && examples.rows() <= most,
+        train.rows() > most / 4 && train.rows() <= most,
         "the steps from the first glimpse to the last: {} of {most}",
-        examples.rows()
+        train.rows()
     );
     let fit = MirrorFit {
         width: 32,
-        draws: 2,
+        draws: 3,
         steps: 400,
         batch: 128,
         lr: 3e-3,
         seed: 1,
     };
+    let device = Device::flex().autodiff();
     let mut last = None;
-    let mirror = fit_mirror(&examples, None, fit, &Device::flex().autodiff(), |p| {
-        last = Some(p)
-    })
-    .unwrap();
+    let mirror = fit_mirror(&train, None, fit, &device, |p| last = Some(p)).unwrap();
     let last = last.expect("progress at the end");
     assert_eq!(last.step, 400);
-    let before = interpolation_mse(&examples).sqrt();
-    assert!(
-        last.rmse < 0.8 * before,
-        "the stage's RMSE {} against the interpolation's {before}",
-        last.rmse
-    );
     assert_eq!(mirror.width(), 32);
+    let (interpolated, corrected) = (
+        interpolation_mse(&held_out).sqrt(),
+        stage_rmse(&mirror, &held_out, &device),
+    );
+    println!(
+        "held out: the stage's RMSE {corrected:.4} against the interpolation's {interpolated:.4} \
+         (training reads: {:.4} against {:.4})",
+        stage_rmse(&mirror, &train, &device),
+        interpolation_mse(&train).sqrt()
+    );
+    assert!(
+        corrected < 0.8 * interpolated,
+        "on unseen demonstrations the stage's RMSE {corrected} against the interpolation's \
+         {interpolated}"
+    );
     let empty = MirrorExamples::new(JOINTS);
-    let err = fit_mirror(&empty, None, fit, &Device::flex().autodiff(), |_| {}).unwrap_err();
+    let err = fit_mirror(&empty, None, fit, &device, |_| {}).unwrap_err();
     assert!(err.to_string().contains("no training examples"), "{err}");
+}
+
+/// The stage the page's default file ships with beats its network on unseen demonstrations:
+/// 40 per action (simulator seeds 2,000,000 on; the network trained on seeds 1000-2999, the
+/// stage on the network's reads of those, σ was calibrated on 700000-700029), imitated from 5
+/// evenly spaced frames (blend 1, as `dmbn imitate --task frames`): with its stage the file
+/// performs joints closer to the demonstrations' than its network alone, at most 0.85× its
+/// joint RMSE, lands more pushes and carries at least as many grasps. Measured (2026-12-07):
+/// joint RMSE 0.0264 against 0.0350 rad (0.75×; at 20, 30 and 50 per action 0.75-0.76×),
+/// pushes 37 against 32 of 40 (46 against 38 of 50), grasps 38 against 33 (47 against 42).
+#[test]
+fn the_shipped_stage_beats_its_network_on_unseen_demonstrations() {
+    let shipped = Predictor::load(support::asset("models/attn-sim.dmbn")).unwrap();
+    let plain = network_only();
+    // Per file: successes per action (grasp, move), the joints' squared error and values.
+    let mut tally = [([0usize; 2], 0.0f64, 0usize); 2];
+    for i in 0..40 {
+        for (a, action) in Action::ALL.into_iter().enumerate() {
+            let demo = episode(action, 2_000_000 + i, 64).unwrap();
+            for (predictor, (successes, se, values)) in
+                [&shipped, &plain].into_iter().zip(&mut tally)
+            {
+                let done = imitate(predictor, &demo, action, Task::Frames, 5, 1.0)
+                    .unwrap()
+                    .expect("long enough for 5 glimpses");
+                successes[a] += usize::from(done.outcome.success);
+                *se += done.joint_se.iter().sum::<f64>();
+                *values += done.joint_steps * done.joint_se.len();
+            }
+        }
+    }
+    let rmse = |(_, se, values): &([usize; 2], f64, usize)| (se / *values as f64).sqrt();
+    let ([grasps, pushes], [plain_grasps, plain_pushes]) = (tally[0].0, tally[1].0);
+    let (with_stage, alone) = (rmse(&tally[0]), rmse(&tally[1]));
+    println!(
+        "with the stage: joint RMSE {with_stage:.4}, {pushes} pushes, {grasps} grasps of 40; \
+         the network alone: {alone:.4}, {plain_pushes} pushes, {plain_grasps} grasps"
+    );
+    assert!(
+        with_stage <= 0.85 * alone,
+        "joint RMSE {with_stage} with the stage, {alone} without"
+    );
+    assert!(
+        pushes > plain_pushes,
+        "pushes landed: {pushes} with the stage, {plain_pushes} without"
+    );
+    assert!(
+        grasps >= plain_grasps,
+        "grasps carried: {grasps} with the stage, {plain_grasps} without"
+    );
 }
 
 #[test]

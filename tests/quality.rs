@@ -1,6 +1,7 @@
 //! The quality benchmark: the golden scores of the default model (which the wasm tests must
-//! reproduce), `dmbn score` end to end, and the bars every shipped model must clear on
-//! simulated episodes it never saw.
+//! reproduce), `dmbn score` end to end, the bars every shipped model must clear on simulated
+//! episodes it never saw, and the default model's figures there, which it must keep to within
+//! 5%.
 #![cfg(not(target_arch = "wasm32"))]
 
 #[path = "golden/score.rs"]
@@ -9,11 +10,12 @@ mod support;
 
 use std::path::Path;
 use std::process::Command;
+use std::sync::OnceLock;
 
 use dmbn::data::{Normalization, Sequence, JOINTS};
 
 use dmbn::predict::Predictor;
-use dmbn::quality::{score_sequence, MeanMotion, Scenario};
+use dmbn::quality::{score_sequence, MeanMotion, Quality, Scenario};
 use dmbn::sim::{episode, Action};
 use golden_score as golden;
 
@@ -73,25 +75,79 @@ fn default_model_reproduces_the_golden_scores() {
     assert!(samples[0][9 + 4] < 1e-12);
 }
 
-/// Episodes no shipped model trained on (the simulator weights trained on seeds 1000-2999),
-/// both actions.
-fn unseen() -> Vec<(&'static str, Sequence)> {
-    (0..3)
-        .flat_map(|i| Action::ALL.map(|a| (a.name(), episode(a, 200_000 + i, 64).unwrap())))
-        .collect()
+/// Unseen episodes per action behind the default model's bars. Its measures vary over
+/// episodes: the standard deviation of each figure over sets of 80 episodes per action is
+/// 1.1-2.8% of it (bootstrapped from 100 per action, 2026-12-07: joint RMSE 1.5% between the
+/// observations and 2.4% forecasting, image MSE 1.1% and 1.8%, object IoU 2.5%, the joints
+/// read from frames alone 2.5-2.8%; at 3 per action, as these tests had, 6-15%; at 10,
+/// 3-7%). So a model 10% worse than the shipped file overall is 10% ± 2.8% worse on these
+/// episodes, and fails bars 5% above the shipped figures about 19 times in 20 even where the
+/// noise is largest, while an equally good one passes them as often. About 50 s of the tests'
+/// build on one core (0.11 s a sequence and measurement).
+const EPISODES: usize = 80;
+
+/// How much worse than the shipped file's figure on the unseen episodes the default model may
+/// be (see [`EPISODES`]): half the 10% regression the bars must catch.
+const TOLERANCE: f64 = 0.05;
+
+/// The first `per_action` of [`EPISODES`] unseen episodes per action (seeds 200,000 on; the
+/// simulator weights trained on seeds 1000-2999 and had their σ calibrated on
+/// 700000-700029), both actions: made once per test binary, which every test shares.
+fn unseen(per_action: usize) -> &'static [(&'static str, Sequence)] {
+    static UNSEEN: OnceLock<Vec<(&'static str, Sequence)>> = OnceLock::new();
+    let all = UNSEEN.get_or_init(|| {
+        (0..EPISODES as u64)
+            .flat_map(|i| Action::ALL.map(|a| (a.name(), episode(a, 200_000 + i, 64).unwrap())))
+            .collect()
+    });
+    &all[..2 * per_action.min(EPISODES)]
 }
 
 /// Each action's mean motion over 10 other unseen episodes.
-fn mean_motion() -> MeanMotion {
-    let reference: Vec<(&str, Sequence)> = (0..10)
-        .flat_map(|i| Action::ALL.map(|a| (a.name(), episode(a, 300_000 + i, 64).unwrap())))
-        .collect();
-    MeanMotion::fit(reference.iter().map(|(a, s)| (*a, s))).unwrap()
+fn mean_motion() -> &'static MeanMotion {
+    static MEAN: OnceLock<MeanMotion> = OnceLock::new();
+    MEAN.get_or_init(|| {
+        let reference: Vec<(&str, Sequence)> = (0..10)
+            .flat_map(|i| Action::ALL.map(|a| (a.name(), episode(a, 300_000 + i, 64).unwrap())))
+            .collect();
+        MeanMotion::fit(reference.iter().map(|(a, s)| (*a, s))).unwrap()
+    })
+}
+
+/// The default model's, the baseline's and the mean motion's measures on every unseen episode
+/// in `scenario` with blend `blend` (0.5, or 1: frames alone): measured once per test binary.
+fn default_model(scenario: Scenario, blend: f32) -> &'static (Quality, Quality, Quality) {
+    static MEASURED: [OnceLock<(Quality, Quality, Quality)>; 3] =
+        [OnceLock::new(), OnceLock::new(), OnceLock::new()];
+    let slot = match (scenario, blend) {
+        (Scenario::Interp, 0.5) => 0,
+        (Scenario::Extrap, 0.5) => 1,
+        (Scenario::Interp, 1.0) => 2,
+        _ => unreachable!("not measured: {scenario} at blend {blend}"),
+    };
+    MEASURED[slot].get_or_init(|| {
+        let predictor = Predictor::from_bytes(golden::MODEL).unwrap();
+        let measured = support::measure_blended(
+            &predictor,
+            unseen(EPISODES),
+            scenario,
+            blend,
+            mean_motion(),
+        );
+        println!(
+            "{scenario}, blend {blend}, {EPISODES} episodes per action:\nmodel: {:?}\nbaseline: {:?}",
+            measured.0, measured.1
+        );
+        measured
+    })
 }
 
 /// A model that ignores its observations scores like the action's mean motion at best:
 /// every shipped simulator model must do clearly better on episodes it never saw, and better
-/// than an untrained model of its kind.
+/// than an untrained model of its kind. A property, not a regression bar: each model's
+/// measures are at most 0.36 of the mean motion's (pte-sim's image MSE at the observed steps),
+/// the bar 0.8, and on 3 episodes per action they vary by 7-14% (measured on 30 per action,
+/// 2026-12-07), so 3 suffice.
 #[test]
 fn shipped_simulator_models_use_their_observations() {
     uses_its_observations(&SHIPPED_SIM);
@@ -105,35 +161,30 @@ fn the_default_model_improves_on_its_untrained_self() {
 }
 
 fn uses_its_observations(names: &[&str]) {
-    let (seqs, mean) = (unseen(), mean_motion());
+    let (seqs, mean) = (unseen(3), mean_motion());
     for &name in names {
         let predictor = Predictor::load(support::asset(&format!("models/{name}.dmbn"))).unwrap();
         let fresh = support::untrained(predictor.model().kind(), Normalization::identity(JOINTS));
-        support::assert_uses_its_observations(name, &predictor, &fresh, &seqs, &mean);
+        support::assert_uses_its_observations(name, &predictor, &fresh, seqs, mean);
     }
 }
 
 /// The bars for the page's default model, on the unseen episodes: with 5 evenly
-/// spaced observations its joints are no worse than linear interpolation and within 0.02 rad
-/// at the observed steps, its frames no worse than the nearest observed frame and the object
-/// visible in them (mask IoU >= 0.3); observing the first 30%, the rest of the joints at most
-/// half the error of holding the last observation (the frames: the next test).
+/// spaced observations its joints are no worse than linear interpolation, its frames no worse
+/// than the nearest observed frame and the object visible in them (mask IoU >= 0.3);
+/// observing the first 30%, the rest of the joints at most half the error of holding the last
+/// observation (the frames: the next test). The 0.02 rad at the observed steps is not
+/// among them: at blend 0.5 the attentive model returns its observed joints by construction,
+/// so it could not fail; the joints it reads at the observed steps from frames alone take its
+/// place ([`from_frames_alone_the_default_model_reads_the_joints_as_well_as_it_shipped`]).
 #[test]
 fn the_default_model_beats_the_trivial_baselines() {
-    let (seqs, mean) = (unseen(), mean_motion());
-    let predictor = Predictor::from_bytes(golden::MODEL).unwrap();
-    let (model, baseline, _) = support::measure(&predictor, &seqs, Scenario::Interp, &mean);
-    println!("interp: {model:?}\nbaseline: {baseline:?}");
+    let (model, baseline, _) = default_model(Scenario::Interp, 0.5);
     assert!(
         model.joint_rmse <= baseline.joint_rmse,
         "interp joint RMSE {} vs linear {}",
         model.joint_rmse,
         baseline.joint_rmse
-    );
-    assert!(
-        model.observed_joint_rmse <= 0.02,
-        "joint RMSE at the observed steps {}",
-        model.observed_joint_rmse
     );
     assert!(
         model.image_mse <= baseline.image_mse,
@@ -145,8 +196,7 @@ fn the_default_model_beats_the_trivial_baselines() {
         .object_iou
         .expect("the object is visible in the true frames");
     assert!(iou >= 0.3, "object IoU {iou}");
-    let (model, baseline, _) = support::measure(&predictor, &seqs, Scenario::Extrap, &mean);
-    println!("extrap: {model:?}\nbaseline: {baseline:?}");
+    let (model, baseline, _) = default_model(Scenario::Extrap, 0.5);
     assert!(
         model.joint_rmse <= 0.5 * baseline.joint_rmse,
         "extrap joint RMSE {} vs hold-last {}",
@@ -159,16 +209,84 @@ fn the_default_model_beats_the_trivial_baselines() {
 /// holding the last observation.
 #[test]
 fn the_default_model_halves_hold_last_s_frame_error_when_forecasting() {
-    let (seqs, mean) = (unseen(), mean_motion());
-    let predictor = Predictor::from_bytes(golden::MODEL).unwrap();
-    let (model, baseline, _) = support::measure(&predictor, &seqs, Scenario::Extrap, &mean);
-    println!("extrap: {model:?}\nbaseline: {baseline:?}");
+    let (model, baseline, _) = default_model(Scenario::Extrap, 0.5);
     assert!(
         model.image_mse <= 0.5 * baseline.image_mse,
         "extrap image MSE {} vs hold-last {}",
         model.image_mse,
         baseline.image_mse
     );
+}
+
+/// One of the default model's measures on the unseen episodes against the shipped file's
+/// figure there: a message when it is more than [`TOLERANCE`] worse (`higher`: whether higher
+/// is better).
+fn regressed(what: &str, got: f64, shipped: f64, higher: bool) -> Option<String> {
+    let (bar, worse) = if higher {
+        let bar = shipped * (1.0 - TOLERANCE);
+        (bar, got < bar)
+    } else {
+        let bar = shipped * (1.0 + TOLERANCE);
+        (bar, got > bar)
+    };
+    println!("{what}: {got:.6} (shipped {shipped:.6}, bar {bar:.6})");
+    worse.then(|| format!("{what} {got:.6}: the shipped file's {shipped:.6}, the bar {bar:.6}"))
+}
+
+/// The bars leave the page's default model room to get much worse (its joint error
+/// between the observations is 0.6× linear interpolation's, forecasting 0.26× holding the
+/// last observation): on the unseen episodes it must stay within [`TOLERANCE`] of the shipped
+/// file's figures, so that a model 10% worse fails (see [`EPISODES`]). The figures are
+/// `attn-sim.dmbn`'s as shipped (2026-12-07, 80 episodes per action); a better file ships
+/// with its own (the test prints them).
+#[test]
+fn the_default_model_is_no_worse_than_it_shipped() {
+    let (interp, _, _) = default_model(Scenario::Interp, 0.5);
+    let (extrap, _, _) = default_model(Scenario::Extrap, 0.5);
+    let iou = interp.object_iou.expect("the object is visible");
+    let failures: Vec<String> = [
+        regressed("interp joint RMSE", interp.joint_rmse, 0.02524, false),
+        regressed("interp image MSE", interp.image_mse, 0.001632, false),
+        regressed("interp object IoU", iou, 0.5576, true),
+        regressed("extrap joint RMSE", extrap.joint_rmse, 0.03957, false),
+        regressed("extrap image MSE", extrap.image_mse, 0.002551, false),
+    ]
+    .into_iter()
+    .flatten()
+    .collect();
+    assert!(failures.is_empty(), "{failures:#?}");
+}
+
+/// From frames alone (blend 1; the page's Imitate mode) the default model reads the joints at
+/// the 5 observed steps, and fills in the rest, within [`TOLERANCE`] of the shipped file's
+/// figures on the unseen episodes: what the mirror performs from. It takes the place of the
+/// issue's 0.02 rad at the observed steps, which the attentive model meets by construction at
+/// blend 0.5 (it returns its observed joints) and misses from frames alone (0.0233 rad). The
+/// file without its mirror stage fails both bars (measured: 0.0329 and 0.0371 rad, 41% and
+/// 29% worse; at blend 0.5 it is the same model).
+#[test]
+fn from_frames_alone_the_default_model_reads_the_joints_as_well_as_it_shipped() {
+    let (frames, _, motion) = default_model(Scenario::Interp, 1.0);
+    // The frames are read, not ignored: far below the mean motion's error there.
+    assert!(
+        frames.observed_joint_rmse < 0.3 * motion.observed_joint_rmse,
+        "{} vs the mean motion's {}",
+        frames.observed_joint_rmse,
+        motion.observed_joint_rmse
+    );
+    let failures: Vec<String> = [
+        regressed(
+            "joint RMSE at the observed steps",
+            frames.observed_joint_rmse,
+            0.02330,
+            false,
+        ),
+        regressed("joint RMSE", frames.joint_rmse, 0.02884, false),
+    ]
+    .into_iter()
+    .flatten()
+    .collect();
+    assert!(failures.is_empty(), "{failures:#?}");
 }
 
 #[test]
@@ -392,7 +510,7 @@ fn shipped_simulator_models_two_sigma_bands_hold_90_to_98_percent() {
         .flat_map(|name| {
             let predictor =
                 Predictor::load(support::asset(&format!("models/{name}.dmbn"))).unwrap();
-            support::two_sigma_misses(name, &predictor, &seqs, &mean)
+            support::two_sigma_misses(name, &predictor, &seqs, mean)
         })
         .collect();
     assert!(failures.is_empty(), "{failures:#?}");

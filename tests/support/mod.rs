@@ -156,13 +156,28 @@ pub fn measure(
     dmbn::quality::Quality,
     dmbn::quality::Quality,
 ) {
+    measure_blended(predictor, seqs, scenario, 0.5, mean)
+}
+
+/// [`measure`] with blending coefficient `blend` (1: frames alone).
+pub fn measure_blended(
+    predictor: &dmbn::predict::Predictor,
+    seqs: &[(&str, dmbn::data::Sequence)],
+    scenario: dmbn::quality::Scenario,
+    blend: f32,
+    mean: &dmbn::quality::MeanMotion,
+) -> (
+    dmbn::quality::Quality,
+    dmbn::quality::Quality,
+    dmbn::quality::Quality,
+) {
     use dmbn::quality::{score_sequence, Accumulator, SequenceScores};
     let mut acc = SequenceScores {
         mean_motion: Some(Accumulator::default()),
         ..Default::default()
     };
     for (action, seq) in seqs {
-        let s = score_sequence(predictor, seq, action, scenario, 5, 0.5, Some(mean))
+        let s = score_sequence(predictor, seq, action, scenario, 5, blend, Some(mean))
             .unwrap()
             .unwrap();
         acc.model.merge(&s.model);
