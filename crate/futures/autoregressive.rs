@@ -1,7 +1,7 @@
 use rand::{RngExt, SeedableRng};
 use rand_pcg::Pcg64;
 
-use super::{FutureScores, Order, Sampling};
+use super::{FutureScores, Method, Order, Sampling};
 use crate::data::{Joints, Sequence};
 use crate::model::{EncodedContexts, ModelError};
 use crate::predict::{Encoding, Observations, Predictor};
@@ -49,15 +49,24 @@ pub fn draw_futures_from(
             "is empty: expected the steps to imagine",
         ));
     }
+    let has_latent = predictor.model().latent_size().is_some();
+    match sampling.method {
+        Method::Latent if !has_latent => {
+            return Err(ModelError::observation(
+                "method",
+                "is latent, but this model has no latent path: expected ar or auto (train one with --latent L)",
+            ))
+        }
+        Method::Latent | Method::Auto if has_latent => {
+            return draw_latent_futures(predictor, observed, blend, sampling)
+        }
+        _ => {}
+    }
     let image_size = predictor.model().image_size();
     let grid = grid(target_times, sampling.grid);
     (0..sampling.samples)
         .map(|s| {
-            let mut rng = Pcg64::seed_from_u64(
-                sampling
-                    .seed
-                    .wrapping_add((s as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)),
-            );
+            let mut rng = future_rng(sampling, s);
             let mut order = grid.clone();
             if sampling.order == Order::Random {
                 for i in (1..order.len()).rev() {
@@ -91,6 +100,52 @@ pub fn draw_futures_from(
         .collect()
 }
 
+/// Future `s`'s generator: the same whatever S.
+fn future_rng(sampling: &Sampling, s: usize) -> Pcg64 {
+    Pcg64::seed_from_u64(
+        sampling
+            .seed
+            .wrapping_add((s as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)),
+    )
+}
+
+/// S futures through the model's latent path: per future, z drawn from the prior the
+/// observations give, N(μ, (τσ)²), then the mean at every step given the observations and z.
+/// Nothing is drawn step by step ([`Future::drawn`] is empty).
+fn draw_latent_futures(
+    predictor: &Predictor,
+    observed: &EncodedContexts,
+    blend: f32,
+    sampling: &Sampling,
+) -> Result<Vec<Future>, ModelError> {
+    let base = predictor.represent(observed, blend)?;
+    let Some(prior) = predictor.model().prior(&base.representation) else {
+        return Err(ModelError::observation(
+            "method",
+            "the model has no latent path",
+        ));
+    };
+    let read = |t: burn::tensor::Tensor<2>| -> Vec<f32> {
+        t.into_data()
+            .convert::<f32>()
+            .try_to_vec()
+            .unwrap_or_default()
+    };
+    let (mean, sigma) = (read(prior.mean), read(prior.sigma));
+    (0..sampling.samples)
+        .map(|s| {
+            let mut rng = future_rng(sampling, s);
+            let z: Vec<f32> = (mean.iter().zip(&sigma))
+                .map(|(m, sd)| m + sampling.temperature * sd * standard_normal(&mut rng))
+                .collect();
+            Ok(Future {
+                encoding: predictor.with_latent(&base, &z)?,
+                drawn: Vec::new(),
+            })
+        })
+        .collect()
+}
+
 /// The joint rows at `times` (a sequence's every step, say) of S futures drawn over `future`
 /// (the times of the steps to imagine) by [`draw_futures`]: one performable trajectory each.
 pub fn sample_trajectories(
@@ -117,16 +172,16 @@ pub fn trajectories(
         .collect()
 }
 
-/// The joint rows at `target_times` of S futures of the encoded observations `observed`,
-/// drawn over the targets that are not an observed time (`Model.sample` in wasm). Fails when
-/// every target is observed: nothing is left to imagine.
-pub fn sample_unobserved(
+/// S futures of the encoded observations `observed`, drawn over the targets that are not an
+/// observed time (`Model.sample` in wasm). Fails when every target is observed: nothing is
+/// left to imagine.
+pub fn draw_unobserved(
     predictor: &Predictor,
     observed: &EncodedContexts,
     target_times: &[f32],
     blend: f32,
     sampling: &Sampling,
-) -> Result<Vec<Joints>, ModelError> {
+) -> Result<Vec<Future>, ModelError> {
     let times = observed.observed_times();
     let future: Vec<f32> = (target_times.iter())
         .filter(|t| !times.contains(t))
@@ -138,8 +193,31 @@ pub fn sample_unobserved(
             "holds only observed times: expected steps to imagine",
         ));
     }
-    let futures = draw_futures_from(predictor, observed, &future, blend, sampling)?;
+    draw_futures_from(predictor, observed, &future, blend, sampling)
+}
+
+/// The joint rows at `target_times` of [`draw_unobserved`]'s futures.
+pub fn sample_unobserved(
+    predictor: &Predictor,
+    observed: &EncodedContexts,
+    target_times: &[f32],
+    blend: f32,
+    sampling: &Sampling,
+) -> Result<Vec<Joints>, ModelError> {
+    let futures = draw_unobserved(predictor, observed, target_times, blend, sampling)?;
     trajectories(predictor, &futures, target_times)
+}
+
+/// Each future's mean frame at time `t` (RGB bytes): where it ends, for `t` its last step.
+pub fn frames_at(
+    predictor: &Predictor,
+    futures: &[Future],
+    t: f32,
+) -> Result<Vec<Vec<u8>>, ModelError> {
+    let frames = futures.iter();
+    frames
+        .map(|f| Ok(predictor.decode(&f.encoding, &[t])?.mean_frame(0)))
+        .collect()
 }
 
 /// S futures of `seq` from its `observed` steps scored against it at the `imagined` ones

@@ -45,17 +45,64 @@ impl FromStr for Order {
     }
 }
 
+/// How a future is drawn.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Method {
+    /// The latent path's where the model has one, otherwise autoregressive (the default).
+    Auto,
+    /// Autoregressive: the grid's steps drawn one after another (any model).
+    Ar,
+    /// The model's latent path: z drawn once from its prior, then the mean at every step.
+    Latent,
+}
+
+impl Method {
+    /// `auto`, `ar` or `latent`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Auto => "auto",
+            Method::Ar => "ar",
+            Method::Latent => "latent",
+        }
+    }
+}
+
+impl fmt::Display for Method {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for Method {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s {
+            "auto" => Ok(Method::Auto),
+            "ar" => Ok(Method::Ar),
+            "latent" => Ok(Method::Latent),
+            _ => Err(format!(
+                "{s:?} is not a method: expected auto, ar or latent"
+            )),
+        }
+    }
+}
+
 /// How futures are sampled ([`super::draw_futures`]).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Sampling {
     /// S: futures drawn (as one batch of sequences).
     pub samples: usize,
+    /// Autoregressive or through the model's latent path.
+    pub method: Method,
     /// G: target steps drawn one after another per future, evenly spaced over the targets
     /// (the last target among them).
     pub grid: usize,
     /// The order the grid is drawn in.
     pub order: Order,
-    /// τ: each step is drawn from N(μ, (τσ)²); below 1 the futures keep nearer the mean.
+    /// τ: each step (or the latent z) is drawn from N(μ, (τσ)²); below 1 the futures keep
+    /// nearer the mean.
     pub temperature: f32,
     /// Seeds the draws: the same seed, the same futures, natively and in wasm.
     pub seed: u64,
@@ -70,6 +117,7 @@ impl Default for Sampling {
     fn default() -> Self {
         Sampling {
             samples: 8,
+            method: Method::Auto,
             grid: 2,
             order: Order::LeftToRight,
             temperature: 0.7,
@@ -90,6 +138,29 @@ impl Sampling {
             seed: self.seed.wrapping_add(offset),
             ..*self
         }
+    }
+
+    /// How the futures are drawn, in words (the reports' headings): "latent path, τ 1, seed
+    /// 0", "2 steps drawn, left-to-right, τ 0.7, seed 0", or for `auto` both.
+    pub fn describe(&self) -> String {
+        let ar = format!("{} steps drawn, {}", self.grid, self.order);
+        let how = match self.method {
+            Method::Latent => "latent path".to_string(),
+            Method::Ar => ar,
+            Method::Auto => format!("a model's latent path, or without one {ar}"),
+        };
+        format!("{how}, τ {}, seed {}", self.temperature, self.seed)
+    }
+
+    /// The sampling as drawn for a model with (`true`) or without a latent path: `auto`
+    /// resolved.
+    pub fn resolved(&self, has_latent: bool) -> Sampling {
+        let method = match self.method {
+            Method::Auto if has_latent => Method::Latent,
+            Method::Auto => Method::Ar,
+            other => other,
+        };
+        Sampling { method, ..*self }
     }
 
     /// Fails unless 1 ≤ S ≤ [`Sampling::MAX_SAMPLES`], 0 ≤ τ ≤ 4 and 1 ≤ G ≤

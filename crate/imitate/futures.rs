@@ -120,8 +120,10 @@ impl FuturesReport {
     pub fn table(&self) -> String {
         let s = &self.sampling;
         let mut out = format!(
-            "task {}, {} sampled futures each ({} steps drawn, {}, τ {}, seed {}):\n\n| action | model | demonstrations | validity | coverage | of ceiling | single mean: valid | single mean: success |\n|---|---|---:|---:|---:|---:|---:|---:|\n",
-            self.task, s.samples, s.grid, s.order, s.temperature, s.seed
+            "task {}, {} sampled futures each ({}):\n\n| action | model | demonstrations | validity | coverage | of ceiling | single mean: valid | single mean: success |\n|---|---|---:|---:|---:|---:|---:|---:|\n",
+            self.task,
+            s.samples,
+            s.describe()
         );
         let pc = |v: f64| format!("{:.0}%", v * 100.0);
         for r in &self.rows {

@@ -58,6 +58,9 @@ impl std::str::FromStr for ModelKind {
     }
 }
 
+/// The largest latent z ([`ModelConfig::latent`]).
+pub const MAX_LATENT: usize = 256;
+
 /// Everything that defines a model besides its weights; saved in the model file's header.
 #[derive(Config, Debug, PartialEq)]
 pub struct ModelConfig {
@@ -100,6 +103,9 @@ pub struct ModelConfig {
     /// joints wherever the observations are frames only (blend 1). Absent (older files, or
     /// none fitted): the network's own joints.
     pub mirror: Option<usize>,
+    /// The attentive model: size L of a global latent z ([`super::LatentPath`]), drawn once
+    /// per sampled future. Absent (older files): none; futures are drawn autoregressively.
+    pub latent: Option<usize>,
     /// Joint values a step (D), read from the training data: sizes the joint encoder, the
     /// joint decoder's heads, the attentive model's read-out and the mirror stage. Absent
     /// (files written before other robots): 7, the original arm's.
@@ -139,6 +145,23 @@ impl ModelConfig {
             return Err(frame_joints_refused(self.kind));
         }
 
+        if let Some(latent) = self.latent {
+            if self.kind != ModelKind::Attn {
+                return Err(ModelError::config(
+                    "latent",
+                    format!(
+                        "is set for a {} model: only the attentive model has a latent path",
+                        self.kind
+                    ),
+                ));
+            }
+            if !(1..=MAX_LATENT).contains(&latent) {
+                return Err(ModelError::config(
+                    "latent",
+                    format!("is {latent}: expected 1 to {MAX_LATENT} latent values"),
+                ));
+            }
+        }
         if self.mirror == Some(0) {
             return Err(ModelError::config(
                 "mirror",

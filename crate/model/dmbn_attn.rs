@@ -9,6 +9,7 @@ use super::decoder::{Decoder, DecoderConfig};
 use super::dmbn_pte::{pte_context_encodings, pte_encoders, PteEncoders};
 use super::image_encoder::ImageEncoder;
 use super::joint_encoder::JointEncoder;
+use super::latent_path::{LatentGaussian, LatentPath, LatentPathConfig};
 use super::time_embedding::{TimeEmbedding, TimeEmbeddingConfig};
 use super::time_projection::TimeProjection;
 
@@ -63,6 +64,9 @@ pub struct DmbnAttn {
     /// H → D: the joints read from an image context encoding, where the joint decoder starts
     /// when joints are not observed (the mirror: frames only). None in files without it.
     pub frame_joints: Option<Linear>,
+    /// The global latent z (`ModelConfig::latent`): what the contexts leave open, drawn once
+    /// per sampled future. None in files without it.
+    pub latent: Option<LatentPath>,
 }
 
 impl DmbnAttn {
@@ -107,7 +111,21 @@ impl DmbnAttn {
             ),
             frame_joints: (config.frame_joints == Some(true))
                 .then(|| reading_nothing(hidden, config.joint_count(), device)),
+            latent: config
+                .latent
+                .map(|l| LatentPathConfig::new(hidden, l).init(device)),
         })
+    }
+
+    /// The network with a latent path of L values ([`DmbnAttn::latent`]) that adds nothing
+    /// yet: it predicts as before, and training teaches it (`train --init F --latent L`). A
+    /// network that has one keeps it.
+    pub fn with_latent_path(mut self, latent: usize, device: &Device) -> DmbnAttn {
+        if self.latent.is_none() {
+            let hidden = self.start_projection.weight.dims()[1];
+            self.latent = Some(LatentPathConfig::new(hidden, latent).init(device));
+        }
+        self
     }
 
     /// The network with a joint read-out from frames ([`DmbnAttn::frame_joints`]) that reads
@@ -164,7 +182,18 @@ impl DmbnAttn {
             }
             None => contexts.joints().clone(),
         };
+        let prior = self.latent.as_ref().map(|path| {
+            path.distribution(
+                blended_points(&encodings.image, &encodings.joint, &c),
+                contexts.mask().clone(),
+            )
+        });
+        let latent = (self.latent.as_ref())
+            .zip(prior.as_ref())
+            .map(|(path, prior)| path.project(prior.mean.clone()));
         AttentiveContexts {
+            prior,
+            latent,
             times: contexts.times().clone(),
             frames: contexts.frames().clone(),
             joints,
@@ -208,7 +237,34 @@ impl DmbnAttn {
         let x = r - self.time.forward(target_times)
             + embedding
             + self.start_projection.forward(start.features());
+        let x = match &contexts.latent {
+            Some(latent) => x + latent.clone().unsqueeze_dim::<3>(1),
+            None => x,
+        };
         (x, start)
+    }
+
+    /// The posterior over z given the contexts and `[B, M]` targets' joints `[B, M, D]`
+    /// (normalised), each encoded as an observed joint context: training draws z from it.
+    /// None without a latent path.
+    pub fn posterior(
+        &self,
+        contexts: &AttentiveContexts,
+        target_times: Tensor<2>,
+        target_joints: Tensor<3>,
+    ) -> Option<LatentGaussian> {
+        let path = self.latent.as_ref()?;
+        let [b, m] = target_times.dims();
+        let targets = self
+            .joint_projection
+            .forward(self.joint_encoder.forward(target_joints) + self.time.forward(target_times));
+        let observed = blended_points(&contexts.image, &contexts.joint, &contexts.blend);
+        let real = contexts.padding.clone().bool_not().float();
+        let device = real.device();
+        Some(path.distribution(
+            Tensor::cat(vec![observed, targets], 1),
+            Tensor::cat(vec![real, Tensor::ones([b, m], &device)], 1),
+        ))
     }
 
     /// Encode the contexts and decode the batch's target times.
@@ -216,6 +272,13 @@ impl DmbnAttn {
         let (x, start) = self.condition(&self.encode(batch), batch.target_times.clone());
         self.decoder.forward(x, Some(start))
     }
+}
+
+/// Each context's encoding blended as the paper blends the means, c·z_image + (1 − c)·z_joint,
+/// `[B, N, H]`: the points the latent path reads.
+fn blended_points(image: &Tensor<3>, joint: &Tensor<3>, c: &Tensor<1>) -> Tensor<3> {
+    let c = c.clone().unsqueeze_dims::<3>(&[1, 2]);
+    image.clone() * c.clone() + joint.clone() * c.neg().add_scalar(1.0)
 }
 
 /// Size of [`Start::features`] for `d` joint values: the joints and 2 gaps.

@@ -17,6 +17,8 @@ pub struct Loss {
     pub image_mse: Tensor<1>,
     /// Mean squared error of the predicted mean joints (normalised units).
     pub joint_mse: Tensor<1>,
+    /// A model with a latent path, in training: KL(posterior ‖ prior) of z, nats per sequence.
+    pub kl: Option<Tensor<1>>,
 }
 
 /// [`Loss`] read back as numbers.
@@ -32,6 +34,8 @@ pub struct LossValues {
     pub image_mse: f32,
     /// Mean squared error of the mean joints.
     pub joint_mse: f32,
+    /// KL(posterior ‖ prior) of the latent z per sequence (0 without a latent path).
+    pub kl: f32,
 }
 
 impl Loss {
@@ -44,6 +48,7 @@ impl Loss {
                 self.joint_nll.clone(),
                 self.image_mse.clone(),
                 self.joint_mse.clone(),
+                (self.kl.clone()).unwrap_or_else(|| self.joint_mse.zeros_like()),
             ],
             0,
         );
@@ -59,6 +64,7 @@ impl Loss {
             joint_nll: at(2),
             image_mse: at(3),
             joint_mse: at(4),
+            kl: at(5),
         }
     }
 }
@@ -73,6 +79,7 @@ impl LossValues {
             joint_nll: 0.0,
             image_mse: 0.0,
             joint_mse: 0.0,
+            kl: 0.0,
         };
         for v in values {
             sum.total += v.total;
@@ -80,6 +87,7 @@ impl LossValues {
             sum.joint_nll += v.joint_nll;
             sum.image_mse += v.image_mse;
             sum.joint_mse += v.joint_mse;
+            sum.kl += v.kl;
         }
         let n = values.len().max(1) as f32;
         LossValues {
@@ -88,6 +96,7 @@ impl LossValues {
             joint_nll: sum.joint_nll / n,
             image_mse: sum.image_mse / n,
             joint_mse: sum.joint_mse / n,
+            kl: sum.kl / n,
         }
     }
 }
@@ -138,6 +147,7 @@ pub fn gaussian_loss(
         joint_nll,
         image_mse,
         joint_mse,
+        kl: None,
     }
 }
 

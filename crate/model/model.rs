@@ -6,8 +6,8 @@ use super::dmbn_attn::DmbnAttn;
 use super::dmbn_pte::DmbnPte;
 use super::loss::{gaussian_loss, Loss};
 use super::{
-    BatchTensors, ContextEncodings, Decoder, EncodedContexts, ImageEncoder, Mirror, MirrorConfig,
-    ModelConfig, ModelError, ModelKind, Prediction, Representation, Start,
+    BatchTensors, ContextEncodings, Decoder, EncodedContexts, ImageEncoder, LatentGaussian, Mirror,
+    MirrorConfig, ModelConfig, ModelError, ModelKind, Prediction, Representation, Start,
 };
 
 /// One of the three networks.
@@ -35,6 +35,14 @@ pub struct Model {
     /// What built it (kind, sizes, σ floor, loss weight).
     #[module(skip)]
     config: ModelConfig,
+}
+
+/// The error for a latent asked of a model without a latent path.
+fn no_latent_path(kind: ModelKind) -> ModelError {
+    ModelError::config(
+        "latent",
+        format!("this {kind} model has no latent path (train one with --latent L)"),
+    )
 }
 
 impl ModelConfig {
@@ -77,6 +85,91 @@ impl Model {
             }),
             _ => Err(super::config::frame_joints_refused(self.config.kind)),
         }
+    }
+
+    /// An attentive model with a latent path of `latent` values ([`super::LatentPath`]): one
+    /// without gets one that adds nothing yet, so it predicts as before (`train --init F
+    /// --latent L`); one with a path keeps its own. Fails for another kind.
+    pub fn with_latent_path(self, latent: usize, device: &Device) -> Result<Model, ModelError> {
+        match self.network {
+            Network::Attn(net) => {
+                let net = net.with_latent_path(latent, device);
+                let latent = net.latent.as_ref().map(|path| path.latent());
+                let config = self.config.with_latent(latent);
+                config.validate()?;
+                Ok(Model {
+                    network: Network::Attn(net),
+                    mirror: self.mirror,
+                    config,
+                })
+            }
+            _ => Err(ModelError::config(
+                "latent",
+                format!(
+                    "is set for a {} model: only the attentive model has a latent path",
+                    self.kind()
+                ),
+            )),
+        }
+    }
+
+    /// L, the size of the global latent z, for a model with a latent path.
+    pub fn latent_size(&self) -> Option<usize> {
+        self.config.latent
+    }
+
+    /// The prior over z given the contexts `representation` holds; none without a latent path.
+    pub fn prior(&self, representation: &Representation) -> Option<LatentGaussian> {
+        match representation {
+            Representation::Attentive(contexts) => contexts.prior.clone(),
+            Representation::Mean(_) => None,
+        }
+    }
+
+    /// The posterior over z given the contexts and the targets' `[B, M, D]` joints
+    /// (normalised) at `[B, M]` times (training); none without a latent path.
+    pub fn posterior(
+        &self,
+        representation: &Representation,
+        target_times: Tensor<2>,
+        target_joints: Tensor<3>,
+    ) -> Option<LatentGaussian> {
+        match (&self.network, representation) {
+            (Network::Attn(net), Representation::Attentive(contexts)) => {
+                net.posterior(contexts, target_times, target_joints)
+            }
+            _ => None,
+        }
+    }
+
+    /// The representation with z set to `[B, L]` values `z` (drawn from the prior for a
+    /// sampled future, or from the posterior in training) in place of the prior's mean.
+    /// Fails without a latent path or for a z of another shape.
+    pub fn with_latent(
+        &self,
+        representation: &Representation,
+        z: Tensor<2>,
+    ) -> Result<Representation, ModelError> {
+        let (Network::Attn(net), Representation::Attentive(contexts)) =
+            (&self.network, representation)
+        else {
+            return Err(no_latent_path(self.kind()));
+        };
+        let Some(path) = &net.latent else {
+            return Err(no_latent_path(self.kind()));
+        };
+        let expected = [contexts.blend.dims()[0], path.latent()];
+        if z.dims() != expected {
+            return Err(ModelError::Length {
+                field: "z",
+                expected: expected[0] * expected[1],
+                found: z.shape().num_elements(),
+                shape: format!("[B={}, L={}]", expected[0], expected[1]),
+            });
+        }
+        let mut contexts = contexts.clone();
+        contexts.latent = Some(path.project(z));
+        Ok(Representation::Attentive(contexts))
     }
 
     /// The model with `mirror` as its mirror stage (replacing any it had).

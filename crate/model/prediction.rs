@@ -55,6 +55,12 @@ pub struct AttentiveContexts {
     pub padding: Tensor<2, Bool>,
     /// `[B]`: blending coefficient c of each sequence.
     pub blend: Tensor<1>,
+    /// A model with a latent path ([`LatentPath`](super::LatentPath)): the prior over z given
+    /// these contexts.
+    pub prior: Option<super::LatentGaussian>,
+    /// `[B, H]`: what z adds to the decoder input (z at the prior's mean, or a drawn z: see
+    /// [`Model::with_latent`](super::Model::with_latent)); none without a latent path.
+    pub latent: Option<Tensor<2>>,
 }
 
 /// The per-context encodings before the set average, per modality: what the paper's

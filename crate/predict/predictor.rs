@@ -146,6 +146,17 @@ impl Predictor {
         })
     }
 
+    /// `encoding` with the latent z set to `z` (L values, one sequence) for a model with a
+    /// latent path: one sampled future's encoding ([`crate::futures`]). Fails without a path,
+    /// for another L, or for an encoding of several sequences.
+    pub fn with_latent(&self, encoding: &Encoding, z: &[f32]) -> Result<Encoding, ModelError> {
+        let z = Tensor::<2>::from_data(TensorData::new(z.to_vec(), [1, z.len()]), &self.device);
+        Ok(Encoding {
+            representation: self.model.with_latent(&encoding.representation, z)?,
+            ..encoding.clone()
+        })
+    }
+
     /// The prediction at `target_times` (finite phases; any number, decoded in chunks of
     /// [`Predictor::CHUNK`]).
     pub fn decode(

@@ -238,8 +238,10 @@ impl QualityReport {
             return String::new();
         };
         let mut out = format!(
-            "\n{} sampled futures of the unobserved steps ({} steps drawn each, {}, τ {}, seed {}): arm joints, rad, mean over the sequences (energy score: lower is better; the single mean's is its RMSE)\n\n| | sequences | energy score | single mean's | best of {} | a future's RMSE |\n|---|---:|---:|---:|---:|---:|\n",
-            s.samples, s.grid, s.order, s.temperature, s.seed, s.samples
+            "\n{} sampled futures of the unobserved steps ({}): arm joints, rad, mean over the sequences (energy score: lower is better; the single mean's is its RMSE)\n\n| | sequences | energy score | single mean's | best of {} | a future's RMSE |\n|---|---:|---:|---:|---:|---:|\n",
+            s.samples,
+            s.describe(),
+            s.samples
         );
         for row in &self.futures {
             let f = &row.scores;

@@ -88,6 +88,15 @@ pub struct TrainConfig {
     /// arm) is learnt as well as what it is sure of; 0 for the paper's plain NLL.
     #[serde(default)]
     pub beta_nll: f64,
+    /// A model with a latent path: weight of KL(posterior ‖ prior) of z (nats per sequence)
+    /// in the objective, beside the per-value NLLs (see [`TrainConfig::DEFAULT_LATENT_KL`]).
+    #[serde(default = "default_latent_kl")]
+    pub latent_kl: f64,
+    /// Free nats: the KL is not penalised below this many nats per sequence (Kingma et al.
+    /// 2016's free bits), so the posterior can start to carry what the targets show before
+    /// the decoder has learnt to read z (otherwise the path collapses onto its prior).
+    #[serde(default)]
+    pub latent_free_nats: f64,
     /// Fraction of sequence ids held out for validation, in [0, 1); 0 holds none out, and
     /// validation then runs on training sequences (the trainer says so).
     pub val_fraction: f64,
@@ -140,7 +149,16 @@ fn default_frame_cache_mib() -> usize {
     256
 }
 
+fn default_latent_kl() -> f64 {
+    TrainConfig::DEFAULT_LATENT_KL
+}
+
 impl TrainConfig {
+    /// The KL's default weight: the NLLs are means per value, and a sequence's joints are
+    /// about a hundred values (steps × D ≈ 700), so 1/700 would weigh the KL as the ELBO does;
+    /// a little more keeps the prior close to what the posterior draws.
+    pub const DEFAULT_LATENT_KL: f64 = 0.003;
+
     /// A run with the given model, seed and length: the defaults, in one place (the `train`
     /// binary's flags default to them).
     pub fn new(model: ModelConfig, steps: u64, seed: u64) -> TrainConfig {
@@ -160,6 +178,8 @@ impl TrainConfig {
             clip_norm: 1.0,
             drawn_frame_weight: 0.0,
             beta_nll: 0.0,
+            latent_kl: TrainConfig::DEFAULT_LATENT_KL,
+            latent_free_nats: 0.0,
             val_fraction: 0.1,
             val_every: 200,
             val_batches: 8,
@@ -197,12 +217,18 @@ impl TrainConfig {
                 format!("{}: expected a positive number", self.lr),
             ));
         }
-        let weight = self.drawn_frame_weight;
-        if !(weight.is_finite() && weight >= 0.0) {
-            return Err(TrainError::config(
-                "drawn_frame_weight",
-                format!("{weight}: expected a finite value >= 0"),
-            ));
+        let weights = [
+            ("drawn_frame_weight", self.drawn_frame_weight),
+            ("latent_kl", self.latent_kl),
+            ("latent_free_nats", self.latent_free_nats),
+        ];
+        for (field, weight) in weights {
+            if !(weight.is_finite() && weight >= 0.0) {
+                return Err(TrainError::config(
+                    field,
+                    format!("{weight}: expected a finite value >= 0"),
+                ));
+            }
         }
         if !(0.0..=1.0).contains(&self.beta_nll) {
             return Err(TrainError::config(

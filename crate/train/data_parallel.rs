@@ -1,9 +1,9 @@
 use burn::module::Module;
 use burn::optim::{GradientsAccumulator, GradientsParams};
-use burn::tensor::Device;
+use burn::tensor::{Device, Distribution, Tensor};
 
 use crate::augment::{Batch, JointTargets};
-use crate::model::{joint_nll, joint_target_tensors, tensors, LossValues, Model};
+use crate::model::{joint_nll, joint_target_tensors, kl_divergence, tensors, LossValues, Model};
 
 use super::{TrainConfig, TrainError};
 
@@ -78,7 +78,35 @@ fn shard(
     shards: usize,
 ) -> Result<(LossValues, GradientsParams), TrainError> {
     let batch = tensors(batch, device)?;
-    let representation = model.encode(&batch)?;
+    let mut representation = model.encode(&batch)?;
+    let mut kl = None;
+    if model.latent_size().is_some() {
+        // z from its posterior given the targets' joints (reparameterised), the KL to its prior.
+        let (Some(times), Some(joints)) = (
+            Some(batch.target_times.clone()),
+            batch.target_joints.clone(),
+        ) else {
+            return Err(TrainError::config(
+                "latent",
+                "the batch has no target joints",
+            ));
+        };
+        let (times, joints) = if joint_targets.targets > 0 {
+            let (t, j) = joint_target_tensors(joint_targets, model.joint_count(), device)?;
+            (
+                Tensor::cat(vec![times, t], 1),
+                Tensor::cat(vec![joints, j], 1),
+            )
+        } else {
+            (times, joints)
+        };
+        let prior = model.prior(&representation);
+        if let (Some(q), Some(p)) = (model.posterior(&representation, times, joints), prior) {
+            let noise = Tensor::random(q.mean.dims(), Distribution::Normal(0.0, 1.0), device);
+            representation = model.with_latent(&representation, q.draw(noise))?;
+            kl = Some(kl_divergence(&q, &p));
+        }
+    }
     let prediction = model.decode(&representation, batch.target_times.clone())?;
     let mut loss = model.loss(&prediction, &batch, config.beta_nll)?;
     if let (Some(drawn), Some(frames)) = (&prediction.image_drawn, &batch.target_images) {
@@ -93,6 +121,11 @@ fn shard(
         let (mean, sigma) = model.decode_joints(&representation, times)?;
         let nll = joint_nll(mean, sigma, joints, config.beta_nll);
         loss.total = loss.total + nll.mul_scalar(config.model.joint_weight);
+    }
+    if let Some(kl) = kl {
+        loss.kl = Some(kl.clone().detach());
+        let penalised = kl.clamp_min(config.latent_free_nats);
+        loss.total = loss.total + penalised.mul_scalar(config.latent_kl);
     }
     let values = loss.values();
     if !values.total.is_finite() {

@@ -19,6 +19,9 @@ pub struct Metrics {
     pub joint_nll: f32,
     pub image_mse: f32,
     pub joint_mse: f32,
+    /// A model with a latent path: KL(posterior ‖ prior) of z per sequence, nats.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub kl: Option<f32>,
     /// Validation losses, on the lines where validation ran.
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub val_loss: Option<f32>,

@@ -123,11 +123,16 @@ impl Trainer {
                 }
                 config.model.joints = Some(width);
                 config.model.joint_names = model.config().joint_names.clone();
-                // A read-out of joints from frames asked for, which the file may lack.
-                if config.model.frame_joints == Some(true) {
+                // A read-out of joints from frames, or a latent path, asked for, which the
+                // file may lack.
+                let model = if config.model.frame_joints == Some(true) {
                     model.reading_frame_joints(&device)?
                 } else {
                     model
+                };
+                match config.model.latent {
+                    Some(latent) => model.with_latent_path(latent, &device)?,
+                    None => model,
                 }
             }
             None => {
@@ -415,6 +420,7 @@ impl Trainer {
                 joint_nll: values.joint_nll,
                 image_mse: values.image_mse,
                 joint_mse: values.joint_mse,
+                kl: self.model.latent_size().map(|_| values.kl),
                 val_loss: val.map(|(v, _)| v.total),
                 val_image_mse: val.map(|(v, _)| v.image_mse),
                 val_joint_mse: val.map(|(v, _)| v.joint_mse),

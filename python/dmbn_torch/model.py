@@ -423,6 +423,23 @@ def interpolation(target_times, times, mask):
     return weights, gaps
 
 
+class LatentPath(nn.Module):
+    """The attentive model's global latent z (`latent` in the config): a Gaussian from the
+    contexts' blended encodings (per point Linear + ReLU, masked mean, Linear to the mean and
+    a σ in (0.1, 1)), whose projection is added to the decoder input at every target."""
+
+    def __init__(self, h, latent):
+        super().__init__()
+        self.point = nn.Linear(h, h)
+        self.statistics = nn.Linear(h, 2 * latent)
+        self.projection = nn.Linear(latent, h)
+
+    def distribution(self, points, mask):
+        stats = self.statistics(masked_mean(torch.relu(self.point(points)), mask))
+        mean, raw = stats.chunk(2, dim=1)
+        return mean, 0.1 + 0.9 * torch.sigmoid(raw)
+
+
 class DmbnAttn(_PteEncoders):
     """The attentive model: DMBN-PTE's z per context, cross-attention over the context times
     per target and modality, blended, − P(t_target), + the observed modalities' embedding and
@@ -443,6 +460,8 @@ class DmbnAttn(_PteEncoders):
         self.decoder = Decoder(h, image_decoder_shape(config), config["sigma_floor"], d,
                                gated=True)
         self.frame_joints = nn.Linear(h, d) if config.get("frame_joints") else None
+        latent = config.get("latent")
+        self.latent = LatentPath(h, latent) if latent else None
 
     def encode(self, c):
         image, joint = self.encode_contexts(c)
@@ -450,8 +469,13 @@ class DmbnAttn(_PteEncoders):
         if self.frame_joints is not None:
             observed = (c.blend < 1).float()[:, None, None]
             joints = c.joints * observed + self.frame_joints(image) * (1 - observed)
-        return {"contexts": c, "image": image, "joint": joint, "joints": joints,
-                "keys": self.time_embedding(c.times)}
+        r = {"contexts": c, "image": image, "joint": joint, "joints": joints,
+             "keys": self.time_embedding(c.times)}
+        if self.latent is not None:
+            # A prediction takes z at its prior's mean.
+            mean, _ = self.latent.distribution(blend(image, joint, c.blend), c.mask)
+            r["latent"] = self.latent.projection(mean)
+        return r
 
     def decode(self, r, target_times):
         return self.decoder(*self.condition(r, target_times))
@@ -470,6 +494,8 @@ class DmbnAttn(_PteEncoders):
         x = (blend(image, joint, c.blend) - self.time(target_times)
              + (start.observed @ self.observed).unsqueeze(1)
              + self.start_projection(start.features()))
+        if "latent" in r:
+            x = x + r["latent"].unsqueeze(1)
         return x, start
 
 

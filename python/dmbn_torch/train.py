@@ -111,6 +111,10 @@ def train_config(args):
         if args.model and args.model != file["kind"]:
             raise ValueError(f"--init holds a {file['kind']} model, not {args.model}: "
                              "leave --model out to train it")
+        if file.get("latent"):
+            raise ValueError(f"--init {args.init}: the model has a latent path, which the "
+                             "PyTorch twin predicts with but does not train (its KL term): "
+                             "train it with the Rust `train`")
         # A mirror stage learnt the file's network's reads: training the network leaves it
         # behind (`train --init FILE --steps 0 --mirror` fits one to the result).
         model = dict(file, joint_weight=args.joint_weight, mirror=None,

@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use clap::Args;
 
 use dmbn::data::{Dataset, Disk, Sequence, SequenceRef};
-use dmbn::futures::{Order, Sampling};
+use dmbn::futures::{Method, Order, Sampling};
 use dmbn::predict::Predictor;
 
 use crate::error::CliError;
@@ -154,6 +154,10 @@ impl Observing {
 /// How sampled futures are drawn, but for their number (`sample`, `score`, `imitate`).
 #[derive(Args)]
 pub struct SamplingArgs {
+    /// How a future is drawn: through the model's latent path (`latent`), autoregressively
+    /// (`ar`), or `auto` (the latent path where the model has one).
+    #[arg(long, default_value_t = Sampling::default().method)]
+    pub method: Method,
     /// Steps drawn one after another per future, evenly spaced over the imagined steps.
     #[arg(long, default_value_t = Sampling::default().grid)]
     pub grid: usize,
@@ -174,6 +178,7 @@ impl SamplingArgs {
     pub fn sampling(&self, samples: usize) -> Sampling {
         Sampling {
             samples,
+            method: self.method,
             grid: self.grid,
             order: self.order,
             temperature: self.temperature,

@@ -72,7 +72,9 @@ pub fn run(args: SampleArgs) -> Result<(), CliError> {
             "--observe names every step of {id}/{action}: nothing is left to imagine"
         )));
     }
-    let sampling = args.sampling.sampling(args.samples);
+    // `auto` resolved: the report says how this model's futures were drawn.
+    let has_latent = predictor.model().latent_size().is_some();
+    let sampling = args.sampling.sampling(args.samples).resolved(has_latent);
     let times = seq.times();
     let future: Vec<f32> = imagined.iter().map(|&k| times[k]).collect();
     // The observations encoded once: for the futures and for the single mean.
@@ -132,16 +134,17 @@ pub fn run(args: SampleArgs) -> Result<(), CliError> {
     };
     write_json(&args.out.join("samples.json"), &report)?;
     println!(
-        "{} on {id}/{action} ({} steps), observed {:?}, blend {}: {} futures ({} steps drawn each, {}, τ {}, seed {})",
+        "{} on {id}/{action} ({} steps), observed {:?}, blend {}: {} futures ({})",
         report.model,
         seq.len(),
         args.observing.observe,
         args.observing.blend,
         sampling.samples,
-        sampling.grid.min(imagined.len()),
-        sampling.order,
-        sampling.temperature,
-        sampling.seed
+        Sampling {
+            grid: sampling.grid.min(imagined.len()),
+            ..sampling
+        }
+        .describe()
     );
     println!(
         "arm joints over the {} imagined steps (rad): energy score {:.4} (the single mean's {:.4}), best of {} {:.4}, a future's RMSE {:.4}",

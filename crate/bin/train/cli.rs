@@ -135,6 +135,17 @@ struct Args {
     /// imitate`). With --init, a file without the read-out gets one that reads nothing yet.
     #[arg(long, conflicts_with = "resume")]
     frame_joints: bool,
+    /// The attentive model: a latent path of L values, a global z drawn once per sampled
+    /// future (`dmbn sample`, `imitate --samples`), trained with its posterior. With --init, a
+    /// file without one gets one that adds nothing yet.
+    #[arg(long, conflicts_with = "resume")]
+    latent: Option<usize>,
+    /// Weight of the latent path's KL(posterior ‖ prior), nats per sequence, in the objective.
+    #[arg(long, default_value_t = defaults().latent_kl)]
+    latent_kl: f64,
+    /// Free nats: the latent path's KL is not penalised below this many nats per sequence.
+    #[arg(long, default_value_t = defaults().latent_free_nats)]
+    latent_free_nats: f64,
     /// Base learning rate (Adam).
     #[arg(long, default_value_t = defaults().lr)]
     lr: f64,
@@ -361,6 +372,18 @@ fn run(args: Args) -> Result<(), TrainError> {
         } else {
             model
         };
+        let model = match (args.latent, model.latent) {
+            (Some(asked), Some(has)) if asked != has => {
+                return Err(TrainError::config(
+                    "latent",
+                    format!(
+                        "--init has a latent path of {has} values, not {asked}: leave --latent out"
+                    ),
+                ))
+            }
+            (Some(asked), _) => model.with_latent(Some(asked)),
+            (None, _) => model,
+        };
         let mut config = TrainConfig::new(model, steps, args.seed);
         config.batch = args.batch;
         config.max_contexts = args.max_contexts;
@@ -383,6 +406,8 @@ fn run(args: Args) -> Result<(), TrainError> {
         config.clip_norm = args.clip_norm;
         config.drawn_frame_weight = args.drawn_frame_weight;
         config.beta_nll = args.beta_nll;
+        config.latent_kl = args.latent_kl;
+        config.latent_free_nats = args.latent_free_nats;
         config.val_fraction = args.val_fraction;
         config.val_every = args.val_every;
         config.checkpoint_every = args.checkpoint_every;
