@@ -5,12 +5,13 @@
 // worker, the page's own progressive prediction of a whole episode (and the longest main-thread
 // task meanwhile), and live mode's latency (new observation → first frames / whole forecast of
 // the rest, with the other observations kept encoded in the workers and with nothing kept;
-// longest main-thread task while playing). The browser tests assert no duration: the
+// longest main-thread task while playing), and sampling 8 futures of a 100-step sequence
+// through a worker (live and imitate modes' "imagine S futures"). The browser tests assert no duration: the
 // main thread's figures and their goals are here. Saves
 // screenshots of the page mid-prediction to docs/page.png, in live mode to docs/live.png and
 // in imitate mode to docs/imitate.png.
 //
-// Usage: node bench/page.mjs [--runs N] [--no-screenshot | --screenshots-only]
+// Usage: node bench/page.mjs [--runs N] [--no-screenshot | --screenshots-only | --futures-only]
 //   Needs the web package: wasm-pack build --release --target web --out-dir pkg --no-typescript
 //   Figures are medians: N cold page loads (default 7, own browser context and empty cache
 //   each), 5N one-frame and N 100-step predictions per model. Prints a table and one `json:` line.
@@ -28,12 +29,14 @@ const args = process.argv.slice(2);
 let runs = 7;
 let screenshot = true;
 let measure = true;
+let futuresOnly = false;
 for (let i = 0; i < args.length; i++) {
   if (args[i] === "--runs") runs = Number(args[++i]);
   else if (args[i] === "--no-screenshot") screenshot = false;
   else if (args[i] === "--screenshots-only") measure = false;
+  else if (args[i] === "--futures-only") futuresOnly = true;
   else {
-    console.log("usage: node bench/page.mjs [--runs N] [--no-screenshot | --screenshots-only]");
+    console.log("usage: node bench/page.mjs [--runs N] [--no-screenshot | --screenshots-only | --futures-only]");
     process.exit(args[i] === "-h" || args[i] === "--help" ? 0 : 2);
   }
 }
@@ -128,10 +131,54 @@ async function screenshots() {
   await im.close();
 }
 
+/**
+ * Sampling futures through the page's path (`window.dmbn.timeFutures`: a worker, the default
+ * model, every observation encoded each time): 8 futures of a 100-step sequence (evenly spaced
+ * targets) from 5 observed steps of grasp seed 7, both modalities; `runs` seeds after a warm-up.
+ */
+async function measureFutures() {
+  const context = await browser.newContext({ viewport: { width: 1280, height: 940 } });
+  const page = await context.newPage();
+  await page.goto(`${server.url}www/?action=grasp&seed=7&obs=0,10,20,30,40`);
+  await waitState(page, "ready");
+  await page.click("#play"); // pause the animation
+  await new Promise((r) => setTimeout(r, 1000)); // the other workers load the weights
+  const time = (seed) => page.evaluate((seed) => window.dmbn.timeFutures(100, 8, seed), seed);
+  await time(0);
+  const times = [];
+  for (let i = 1; i <= runs; i++) times.push(await time(i));
+  await context.close();
+  return {
+    samples: 8,
+    steps: 100,
+    wall_ms: round(median(times.map((t) => t.wall_ms))),
+    worker_ms: round(median(times.map((t) => t.worker_ms))),
+    encode_ms: round(median(times.map((t) => t.encode_ms))),
+  };
+}
+
+/** The futures' row of the table. */
+const futuresRow = (f) =>
+  `| futures: ${f.samples} sampled futures of a ${f.steps}-step sequence (${NAMES[DEFAULT]}, one worker; page round trip) | ` +
+  `${Math.round(f.wall_ms)} ms (worker ${Math.round(f.worker_ms)} ms, of which encoding ${Math.round(f.encode_ms)} ms) | ≤ 1000 ms |`;
+
 const load = loadavg()[0];
 const server = await serve(ROOT);
 const browser = await launch();
 const result = {};
+if (futuresOnly) {
+  try {
+    result.futures = await measureFutures();
+    result.chromium = browser.version();
+  } finally {
+    await browser.close();
+    await server.close();
+  }
+  console.log(`page benchmark: headless Chromium ${result.chromium}, ${cpus().length}× ${cpus()[0].model}, load average ${round(load, 2)} at the start`);
+  console.log(`  medians of ${runs} samplings\n\n| measure | value | goal |\n|---|---|---|\n${futuresRow(result.futures)}`);
+  console.log(`\njson: ${JSON.stringify(result)}`);
+  process.exit(0);
+}
 if (!measure) {
   try {
     await screenshots();
@@ -293,6 +340,8 @@ try {
     await context.close();
   }
 
+  result.futures = await measureFutures();
+
   if (screenshot) await screenshots();
   result.load_average = [round(load, 2), round(loadavg()[0], 2)];
 } finally {
@@ -337,4 +386,5 @@ console.log(`| live mode, nothing kept encoded: ${live.scratch_observed} observa
 console.log(`| live mode: … of which encoding the ${live.scratch_observed} observations (slowest worker) | ${ms(live.scratch_encode_ms)} | |`);
 console.log(`| live mode: playing a ${live.played_steps}-step episode, every 10th step observed: forecasts finished, first frames | ${live.played_forecasts}, ${ms(live.played_first_frames_ms)} | |`);
 console.log(`| live mode: longest main-thread task while playing | ${ms(live.longest_task_ms)} | ≤ 50 ms (never 300 ms) |`);
+console.log(futuresRow(result.futures));
 console.log(`\njson: ${JSON.stringify(result)}`);

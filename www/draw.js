@@ -1,11 +1,12 @@
 // Drawing the current step as the state says: true and predicted frames, σ map, timeline, joint
-// plot, error plot, table map.
+// plot (with the sampled futures' fan), error plot, table map, the futures' strip.
 
 import { redrawErrors } from "./error_plot.js";
 import { log } from "./hooks.js";
 import { clampInt, observedSteps } from "./observations.js";
 import { defaultJointNames, drawJoints } from "./plot.js";
 import { heldForecast, state } from "./state.js";
+import { drawStrip } from "./strip.js";
 import { ui } from "./ui.js";
 import { clearFrame, drawTable, drawTimeline, rgbImage } from "./views.js";
 
@@ -51,6 +52,7 @@ export function render() {
   const { shown, prediction: p, step } = state;
   if (!shown) {
     drawJoints(ui.plot, ui.plotCursor, null);
+    drawStrip(ui.futuresStrip, null);
     return;
   }
   drawFrames();
@@ -75,9 +77,19 @@ export function render() {
     observed: (live && panels?.steps) || observedSteps(),
     step,
     prediction: panels,
+    futures: panels?.futures,
     labels: shown.mode === "imitate" ? { truth: "demonstrated", mean: "imagined mean" } : undefined,
   });
+  drawFutures(shown.mode, panels?.futures ?? null);
   if (p?.count) firstDrawn(p);
+}
+
+/** Live and imitate modes, futures on: their strip (final frames; outcomes), the one performed marked. */
+function drawFutures(mode, futures) {
+  const hidden = !["live", "imitate"].includes(mode) || !(Number(ui.futures.value) > 0);
+  if (ui.futuresPanel.hidden !== hidden) ui.futuresPanel.hidden = hidden;
+  const perf = state.performance;
+  drawStrip(ui.futuresStrip, hidden ? null : futures, perf?.source === "future" ? perf.future : -1);
 }
 
 /**
@@ -138,7 +150,8 @@ function drawPerformance() {
   const stack = ui.framePred.parentElement;
   stack.classList.toggle("empty", !has);
   stack.dataset.empty = p && !p.complete ? "imagining its joints…" : "no performance yet: choose observations, then Predict";
-  ui.predLabel.textContent = perf ? (perf.source === "imagined" ? "imagined joints" : "demonstration's joints") : "";
+  const labels = { imagined: "imagined joints", demonstration: "demonstration's joints", future: `future ${perf?.future + 1}` };
+  ui.predLabel.textContent = perf ? labels[perf.source] : "";
 }
 
 /** The forecast frame as a ghost over the true one: where the arm is going. */

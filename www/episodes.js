@@ -106,6 +106,7 @@ export function buildShown() {
   ui.live.hidden = ui.errorPanel.hidden = mode !== "live";
   const imitate = mode === "imitate";
   ui.imitatePanel.hidden = !imitate;
+  ui.futuresControls.hidden = !(imitate || mode === "live");
   if (imitate) describe();
   ui.sigmaPanel.hidden = imitate;
   ui.trueCaption.textContent = imitate ? "Demonstration" : "True frame";

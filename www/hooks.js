@@ -29,6 +29,8 @@ export const predictionFinished = () => count("predictions");
 export const comparisonEnded = () => count("compared");
 /** Imitate mode: the arm performed (imagined or demonstrated joints): `body[data-performances]`. */
 export const performanceDone = () => count("performances");
+/** A set of futures is complete (imitate mode: each one performed too): `body[data-imagined]`. */
+export const futuresImagined = () => count("imagined");
 
 /** `body[data-progress]`: the steps the prediction on screen has so far. */
 export function progress(steps) {
@@ -40,9 +42,13 @@ export function seen(from) {
   body.dataset.seen = String(from);
 }
 
-/** Imitate mode: which performance is drawn (`imagined`, `demonstration`, "") and its outcome. */
+/**
+ * Imitate mode: which performance is drawn (`imagined`, `demonstration`, `future`, "") and its
+ * outcome; `body[data-future]`: which future (0 …) when it is one.
+ */
 export function performed(performance) {
   body.dataset.performed = performance?.source ?? "";
+  body.dataset.future = performance?.source === "future" ? String(performance.future) : "";
   body.dataset.outcome = performance ? (performance.outcome.success ? "success" : "missed") : "";
 }
 
@@ -61,12 +67,47 @@ export function plotGrid(canvas, cols, panels) {
   canvas.dataset.panels = String(panels);
 }
 
+/** The futures drawn (futures.js), for `window.dmbn.futures()`. */
+let futuresOnScreen = null;
+
+/** `body[data-futures]`: how many futures are drawn (0: none); `futures` is what is drawn, or null. */
+export function futuresShown(futures) {
+  futuresOnScreen = futures;
+  body.dataset.futures = String(futures?.samples ?? 0);
+}
+
+/**
+ * `window.dmbn.futures()`: the futures drawn, as plain arrays, or null: {id (the prediction's,
+ * as the event log numbers it), model, samples, seed,
+ * from (their first step), steps, jointCount, joints (a T' × D row list per future), mean (the
+ * prediction's rows over the same steps), outcomes (imitate mode: per future its label —
+ * carried, lifted, landed, pushed, missed — or null until performed; live mode: null)}.
+ */
+function describeFutures() {
+  const f = futuresOnScreen;
+  if (!f) return null;
+  const rows = f.steps * f.jointCount;
+  return {
+    id: f.id,
+    model: f.model,
+    samples: f.samples,
+    seed: f.seed,
+    from: f.from,
+    steps: f.steps,
+    jointCount: f.jointCount,
+    joints: Array.from({ length: f.samples }, (_, s) => Array.from(f.joints.subarray(s * rows, (s + 1) * rows))),
+    mean: Array.from(f.mean),
+    outcomes: f.outcomes ? f.outcomes.map((o) => o?.label ?? null) : null,
+  };
+}
+
 /**
  * The event log, `window.dmbnEvents`: what happened, in order, for tests that check order, not
  * time. Each entry is {n (counts up from 1), type, ...}; types: `episode` {digest}, `step` {step}
  * (shown), `start` {id, mode, model, from} (a prediction asked of the workers), `chunk` {id,
  * count} (stored), `drawn` {id, step} (its frame of that step drawn), and its end: `finished`,
- * `cancelled` or `failed` {id, from}. Only the latest few thousand are kept.
+ * `cancelled` or `failed` {id, from}; `imagine` {id, samples, seed} (futures of prediction id
+ * asked of a worker) and `imagined` {id} (stored). Only the latest few thousand are kept.
  */
 const events = (window.dmbnEvents = []);
 const KEEP = 4000;
@@ -92,7 +133,8 @@ export function pass(deliver) {
 /**
  * `window.dmbn`: `hold()` holds the workers' prediction replies (chunks and ends) from now on,
  * `release(n = 1)` hands on the first n held and keeps holding, `resume()` hands on all and
- * stops holding, `held()` counts those waiting; the page adds its own (`expose`).
+ * stops holding, `held()` counts those waiting; `futures()` describes the futures drawn; the
+ * page adds its own (`expose`).
  */
 window.dmbn = {
   hold: () => {
@@ -107,6 +149,7 @@ window.dmbn = {
     for (const deliver of waiting) deliver();
   },
   held: () => held?.length ?? 0,
+  futures: describeFutures,
 };
 
 /** Adds `fns` to `window.dmbn` (main.js: timePrediction, predict, forgetEncodings). */

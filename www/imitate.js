@@ -1,8 +1,9 @@
 // Imitate mode, the mirror: the simulated arm performs the joints a model imagined from the
 // demonstration's observed steps (the wasm `enact`), or for comparison the demonstration's own
-// recorded joints (`replay`), with the object where the demonstration had it. The performance's
-// frames are drawn beside the demonstration's, step for step (draw.js), and its outcome —
-// judged in Rust against the demonstration — in a badge.
+// recorded joints (`replay`), or one of the futures it imagined (futures.js), with the object
+// where the demonstration had it. The performance's frames are drawn beside the
+// demonstration's, step for step (draw.js), and its outcome — judged in Rust against the
+// demonstration — in a badge.
 
 import { performanceDone, performed, timings } from "./hooks.js";
 import { state } from "./state.js";
@@ -67,15 +68,29 @@ function perform(source, enactment) {
     showError(why);
     return null;
   }
-  const t0 = performance.now();
-  let imitation;
+  let result;
   try {
-    imitation = enactment();
+    result = enacted(source, enactment);
   } catch (err) {
     const whose = source === "imagined" ? "The joints the model imagined" : "The demonstration's joints";
     showError(new Error(`${whose} could not be performed: ${err.message ?? err}`));
     return null;
   }
+  timings.imitation = {
+    source,
+    success: result.outcome.success,
+    summary: result.outcome.summary,
+    joint_rmse: result.jointRmse,
+    ms: result.ms,
+  };
+  performanceDone();
+  return result;
+}
+
+/** What the page keeps of the Imitation that `enactment` returns (its frames, outcome, …); throws as it does. */
+function enacted(source, enactment) {
+  const t0 = performance.now();
+  const imitation = enactment();
   const episode = imitation.performance();
   const result = {
     source,
@@ -88,15 +103,26 @@ function perform(source, enactment) {
   };
   episode.free();
   imitation.free();
-  timings.imitation = {
-    source,
-    success: result.outcome.success,
-    summary: result.outcome.summary,
-    joint_rmse: result.jointRmse,
-    ms: result.ms,
-  };
-  performanceDone();
   return result;
+}
+
+/**
+ * The arm performs future `future` of `of` (seeded `seed`): `rows`, a row of joints per step of
+ * the demonstration, imagined from its `observed` steps. Returns the performance, not drawn
+ * (`showFuture`); throws why it cannot be performed. Neither counted nor timed: the hooks'
+ * performance is the imagined mean's or the demonstration's.
+ */
+export function performFuture(rows, observed, { future, of, seed }) {
+  const why = performable();
+  if (why) throw new Error(why);
+  const { handle, action } = state.episode;
+  const result = enacted("future", () => state.wasm.enact(handle, action, rows, observed));
+  return Object.assign(result, { future, of, seed });
+}
+
+/** Draws a future's performance; the one drawn already: back to the imagined joints'. */
+export function showFuture(performance) {
+  show(state.performance === performance && state.imagined ? state.imagined : performance);
 }
 
 /** Makes `performance` (or none) the one drawn. */
@@ -113,10 +139,12 @@ export function describe() {
   ui.outcome.className = `outcome ${p ? (p.outcome.success ? "success" : "missed") : ""}`;
   ui.replay.textContent =
     p?.source === "demonstration" && state.imagined ? "perform the imagined joints" : "perform the demonstration's joints";
+  const rmse = p && `joint RMSE ${p.jointRmse.toFixed(3)} rad against the demonstration's (${Math.round(p.ms)} ms).`;
   ui.imitateInfo.textContent = !p
     ? "Predict: the robot sees the chosen steps (frames only by default), imagines its joints at every step and performs them."
     : p.source === "demonstration"
       ? `The demonstration's recorded joints, performed (${Math.round(p.ms)} ms).`
-      : `The joints it imagined from ${p.observed.length} observed steps (${SEEN[p.observe]}), performed: ` +
-        `joint RMSE ${p.jointRmse.toFixed(3)} rad against the demonstration's (${Math.round(p.ms)} ms).`;
+      : p.source === "future"
+        ? `Future ${p.future + 1} of the ${p.of} it imagined (seed ${p.seed}), performed: ${rmse}`
+        : `The joints it imagined from ${p.observed.length} observed steps (${SEEN[p.observe]}), performed: ${rmse}`;
 }

@@ -105,6 +105,22 @@ export class Inference {
   }
 
   /**
+   * Samples `samples` futures (seeded by `seed`) at `targets` with model `model` from the
+   * observations, in one worker: the last that has the model (the first decodes a live
+   * forecast's step shown first). With `source` and `steps`, the worker's kept encodings serve,
+   * as for `predict`. Returns {done, cancel}: `done` resolves with {type: "sampled", joints,
+   * frames, ms, encodeMs} or {type: "cancelled"}. Cancelling drops the reply; the worker, busy
+   * in one wasm call, finishes it.
+   */
+  sample({ model, frames, joints, times, targets, blend, samples, seed, source, steps }) {
+    const worker = this.workers.findLast((w) => w.models.has(model)) ?? this.workers[0];
+    const msg = { type: "sample", model, frames, joints, times, targets, blend, samples, seed };
+    if (source != null && steps) Object.assign(msg, { source, steps: Array.from(steps) });
+    const { id, done } = this.send(worker, msg, [frames.buffer, joints.buffer, times.buffer, targets.buffer]);
+    return { done, cancel: () => this.cancel(id) };
+  }
+
+  /**
    * Predicts `targets` with model `model` (an id) from the observations in chunks of `chunk`
    * steps spread over the workers; `onChunk({start, count, mean, sigma, maxSigma, jointMean, jointSigma})`
    * gets each chunk (`start` a step index of `targets`) as it arrives (with `firstAlone`, the

@@ -5,6 +5,7 @@ import { observationsChanged } from "./changes.js";
 import { armData, MODEL_NAMES, params, WORKERS } from "./config.js";
 import { generate } from "./episodes.js";
 import { on } from "./events.js";
+import { imagine, timeFutures } from "./futures.js";
 import { expose, started, timings } from "./hooks.js";
 import { clearPerformances, performImagined } from "./imitate.js";
 import { Inference } from "./inference.js";
@@ -25,6 +26,8 @@ on("step", follow);
 on("predicted", (p) => {
   if (p.mode === "live") forecastDone(p);
   if (p.mode === "imitate") performImagined(p);
+  // Live and imitate modes with futures on: sampled once the prediction is complete.
+  imagine(p);
 });
 on("dropped", clearPerformances);
 on("fatal", pause);
@@ -51,7 +54,7 @@ async function main() {
     return;
   }
   // forgetEncodings: the workers encode every observation again (bench/page.mjs).
-  expose({ timePrediction, predict: () => predict(), forgetEncodings: () => state.inference.forget() });
+  expose({ timePrediction, timeFutures, predict: () => predict(), forgetEncodings: () => state.inference.forget() });
   // The chosen model loads in the worker while the episode is simulated here.
   const modelReady = selectModel();
   // Simulating blocks this thread for a moment: first let the worker start (its start needs

@@ -1,7 +1,7 @@
 // The joint curves as small multiples on one canvas, a panel for each of the D joint values a
 // step (the model's: 7 for the simulator's arm, 6 angles and the gripper): the true (shown)
-// values, the predicted mean with its ±2σ band as far as the prediction has come, the observed
-// points and a cursor.
+// values, the predicted mean with its ±2σ band as far as the prediction has come, sampled
+// futures as a fan of thin lines (futures.js), the observed points and a cursor.
 
 import { plotGrid } from "./hooks.js";
 import { cssSize, fit, MUTED, panelFrame } from "./views.js";
@@ -42,6 +42,8 @@ const NARROW = 560;
 const GAP = { x: 14, y: 12 };
 const PAD = { left: 40, right: 6, top: 18, bottom: 16 };
 const TRUE = "#e6e9ef";
+/** The sampled futures' thin lines: light, so the joint's colour stays the mean's. */
+const FUTURE = "rgba(230, 233, 239, 0.45)";
 /** The legend's names of the true curve and the predicted mean, unless told others. */
 const LABELS = { truth: "true (shown)", mean: "predicted mean" };
 
@@ -54,7 +56,8 @@ const drawnFrom = new WeakMap();
  * change, so that playback redraws the cursors alone.
  * `data`: {len, names (a name per joint value: D of them, `Model.jointNames`), joints (T×D
  * true), observed (sorted steps), step, prediction: null or {done (Uint8Array T), jointMean,
- * jointSigma (T×D), count}, labels: optional legend names {truth, mean} (imitate mode:
+ * jointSigma (T×D), count}, futures: null or {samples, from, steps, joints (samples × steps × D:
+ * the steps from `from` on)}, labels: optional legend names {truth, mean} (imitate mode:
  * demonstrated, imagined)}. Returns a function mapping a client x to a step.
  */
 export function drawJoints(canvas, cursor, data) {
@@ -77,11 +80,11 @@ export function drawJoints(canvas, cursor, data) {
   }
   const p = data?.prediction;
   const labels = data?.labels ?? LABELS;
-  const key = [window.devicePixelRatio, w, h, data?.len, data?.joints, data?.observed.join(","), p, p?.count, labels.truth, names.join("\n")];
+  const key = [window.devicePixelRatio, w, h, data?.len, data?.joints, data?.observed.join(","), p, p?.count, data?.futures, labels.truth, names.join("\n")];
   const last = drawnFrom.get(canvas);
   if (!last || key.some((v, i) => v !== last[i])) {
     const { g } = fit(canvas);
-    drawLegend(g, cells[d], labels);
+    drawLegend(g, cells[d], labels, Boolean(data?.futures));
     if (data && data.len >= 1) {
       const titles = jointTitles(names);
       for (let j = 0; j < d; j++) drawJoint(g, cells[j], j, d, titles[j], data);
@@ -103,7 +106,7 @@ export function drawJoints(canvas, cursor, data) {
 }
 
 /** Panel `j` of `d` (joint value j of each step's d), titled `title`. */
-function drawJoint(g, cell, j, d, title, { len, joints, observed, prediction }) {
+function drawJoint(g, cell, j, d, title, { len, joints, observed, prediction, futures }) {
   const left = cell.x + PAD.left;
   const right = cell.x + cell.w - PAD.right;
   const top = cell.y + PAD.top;
@@ -130,6 +133,13 @@ function drawJoint(g, cell, j, d, title, { len, joints, observed, prediction }) 
       const s = 2 * p.jointSigma[k * d + j];
       blo = Math.min(blo, m - s);
       bhi = Math.max(bhi, m + s);
+    }
+  }
+  const future = (s, k) => futures.joints[(s * futures.steps + k - futures.from) * d + j];
+  for (let s = 0; futures && s < futures.samples; s++) {
+    for (let k = futures.from; k < len; k++) {
+      blo = Math.min(blo, future(s, k));
+      bhi = Math.max(bhi, future(s, k));
     }
   }
   lo = Math.max(blo, mid - 1.5 * span);
@@ -175,6 +185,16 @@ function drawJoint(g, cell, j, d, title, { len, joints, observed, prediction }) 
       for (let k = b; k >= a; k--) g.lineTo(x(k), y(mean(k) - 2 * sd(k)));
       g.closePath();
       g.fill();
+    }
+    // The futures: a thin line each, under the mean.
+    if (futures) {
+      g.strokeStyle = FUTURE;
+      g.lineWidth = 0.9;
+      for (let s = 0; s < futures.samples; s++) {
+        g.beginPath();
+        for (let k = futures.from; k < len; k++) g.lineTo(x(k), y(future(s, k)));
+        g.stroke();
+      }
     }
     g.strokeStyle = jointColor(j);
     g.lineWidth = 1.8;
@@ -225,12 +245,13 @@ function drawCursor(g, cell, { len, step }) {
   g.stroke();
 }
 
-function drawLegend(g, cell, labels) {
+function drawLegend(g, cell, labels, futures) {
   if (!cell) return;
   const items = [
     [labels.truth, (x, y) => dashed(g, x, y)],
     [labels.mean, (x, y) => line(g, x, y, "#4dabf7", 2)],
     ["mean ± 2σ", (x, y) => band(g, x, y)],
+    ...(futures ? [["sampled futures", (x, y) => line(g, x, y, FUTURE, 0.9)]] : []),
     ["observed", (x, y) => dot(g, x + 9, y)],
   ];
   g.save();

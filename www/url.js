@@ -29,6 +29,8 @@ export function readUrl() {
   set(ui.liveEvery, "every");
   set(ui.ahead, "ahead");
   if (params.has("ghost")) ui.ghost.checked = params.get("ghost") !== "0";
+  set(ui.futures, "futures");
+  set(ui.futuresSeed, "fseed");
   if (params.has("obs")) {
     state.pendingObserved = params
       .get("obs")
@@ -63,6 +65,10 @@ export function writeUrl() {
   put("every", live ? ui.liveEvery.value : null);
   put("ahead", live ? ui.ahead.value : null);
   put("ghost", live && !ui.ghost.checked ? "0" : null);
+  // Live and imitate modes' futures: how many (left out: none) and their seed.
+  const futures = (live || ui.mode.value === "imitate") && Number(ui.futures.value) > 0;
+  put("futures", futures ? ui.futures.value : null);
+  put("fseed", futures ? ui.futuresSeed.value : null);
   put("observe", ui.observe.value);
   put("obs", live ? null : observedSteps().join(","));
   history.replaceState(null, "", `${location.pathname}?${q}`);

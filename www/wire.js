@@ -5,6 +5,7 @@ import { drawTableMap, render, sigmaOverlay } from "./draw.js";
 import { buildShown, generate } from "./episodes.js";
 import { redrawErrors } from "./error_plot.js";
 import { droppedFiles, openFolder, pickedFiles, sequenceChosen } from "./folder.js";
+import { chooseFuture, futuresChanged } from "./futures.js";
 import { toggleDemonstration } from "./imitate.js";
 import { compareModels, forecastNow, takeRule } from "./live.js";
 import { selectModel } from "./models.js";
@@ -148,6 +149,13 @@ export function wire() {
   ui.ahead.addEventListener("change", () => (writeUrl(), render()));
   ui.ghost.addEventListener("change", () => (writeUrl(), render()));
   ui.compare.addEventListener("click", () => compareModels());
+  const futures = () => (writeUrl(), futuresChanged());
+  ui.futures.addEventListener("change", futures);
+  ui.futuresSeed.addEventListener("change", futures);
+  ui.futuresStrip.addEventListener("click", (e) => {
+    const cell = e.target.closest?.("button.future");
+    if (cell && !state.fatal) chooseFuture(Number(cell.dataset.future));
+  });
   ui.replay.addEventListener("click", () => {
     if (!state.episode || state.fatal) return;
     clearError();

@@ -20,6 +20,9 @@
 //                                           names the sequence, `steps` the step of each
 //                                           observation; `firstAlone`: the first target is
 //                                           decoded (and sent) alone, before its chunk's rest
+//   {type: "sample", model, frames, joints, times, targets, blend, samples, seed,
+//    source?, steps?}                       S sampled futures at `targets` (Model.sampleWithFrames),
+//                                           through the encoded steps as predict's
 //   {type: "cancel", target}                stop prediction `target` if it is running
 //   {type: "forget"}                        drop every model's encoded steps
 // Messages out:
@@ -29,6 +32,8 @@
 //                                          predicts (frames, joints D a step; its chunks T × D)
 //   {type: "chunk", id, start, count, mean, sigma, maxSigma, jointMean, jointSigma, ms}
 //   {type: "done", id, ms, encodeMs, encoded, steps}   encoded: the observations encoded
+//   {type: "sampled", id, joints, frames, ms, encodeMs}  joints S × targets × D, frames the
+//                                      futures' mean frames at the last target (S × S' × S' × 3)
 //   {type: "forgotten", id}
 //   {type: "error", id, message}       also the answer to a malformed message (fields checked
 //                                      against FIELDS below); the worker keeps serving
@@ -68,6 +73,9 @@ self.onmessage = async (e) => {
         current = msg.id;
         await predict(msg);
         break;
+      case "sample":
+        await sample(msg);
+        break;
       case "cancel":
         if (current === msg.target) current = null;
         break;
@@ -93,22 +101,33 @@ const isString = [(v) => typeof v === "string", "a string"];
 const isIndex = [(v) => Number.isSafeInteger(v) && v >= 0, "a non-negative integer"];
 const optional = ([ok, expected]) => [(v) => v == null || ok(v), `${expected} or absent`];
 const typed = (Type) => [(v) => v instanceof Type, `a ${Type.name}`];
+/** What `predict` and `sample` both carry: the model, the observations, the targets, the blend. */
+const OBSERVED = {
+  model: isString,
+  frames: typed(Uint8Array),
+  joints: typed(Float32Array),
+  times: typed(Float32Array),
+  targets: typed(Float32Array),
+  blend: [(v) => typeof v === "number" && v >= 0 && v <= 1, "a number in [0, 1]"],
+};
 /** Each message type's fields and what they must be (as the page sends them; see the top). */
 const FIELDS = {
   init: { module: [(v) => v instanceof WebAssembly.Module, "a WebAssembly.Module"] },
   load: { model: isString, url: isString },
   predict: {
-    model: isString,
-    frames: typed(Uint8Array),
-    joints: typed(Float32Array),
-    times: typed(Float32Array),
-    targets: typed(Float32Array),
-    blend: [(v) => typeof v === "number" && v >= 0 && v <= 1, "a number in [0, 1]"],
+    ...OBSERVED,
     chunk: [(v) => Number.isSafeInteger(v) && v >= 1, "a positive integer"],
     delay: optional([(v) => typeof v === "number" && v >= 0 && v < 60_000, "a delay in ms"]),
     source: optional([(v) => typeof v === "string" || Number.isFinite(v), "a string or number"]),
     steps: optional([(v) => Array.isArray(v) && v.every(isIndex[0]), "an array of step indices"]),
     firstAlone: optional([(v) => typeof v === "boolean", "a boolean"]),
+  },
+  sample: {
+    ...OBSERVED,
+    samples: [(v) => Number.isSafeInteger(v) && v >= 1 && v <= 256, "an integer from 1 to 256"],
+    seed: isIndex,
+    source: optional([(v) => typeof v === "string" || Number.isFinite(v), "a string or number"]),
+    steps: optional([(v) => Array.isArray(v) && v.every(isIndex[0]), "an array of step indices"]),
   },
   cancel: { target: isIndex },
   forget: {},
@@ -227,6 +246,31 @@ function encode(msg, { model, encoded }) {
   } finally {
     contexts.free();
   }
+}
+
+/** The message's observations encoded one by one (a Contexts, which the caller frees): kept ones with a source. */
+function contextsOf(msg, { model, encoded }) {
+  const { frames, joints, times, source, steps } = msg;
+  if (source == null || !steps) return model.encodeContexts(frames, joints, times);
+  return encoded.contextsOf(source, steps, frames, joints, times).contexts;
+}
+
+/** S futures of the observations, drawn at once (one wasm call: it cannot be cancelled midway). */
+async function sample(msg) {
+  const entry = models.get(msg.model);
+  if (!entry) throw new Error(`the ${NAMES[msg.model] ?? msg.model} model is not loaded`);
+  const loaded = await entry.promise;
+  const t0 = performance.now();
+  const contexts = contextsOf(msg, loaded);
+  const encodeMs = performance.now() - t0;
+  let out;
+  try {
+    out = loaded.model.sampleWithFrames(contexts, msg.targets, msg.blend, msg.samples, msg.seed);
+  } finally {
+    contexts.free();
+  }
+  const { joints, frames } = out;
+  post({ type: "sampled", id: msg.id, joints, frames, ms: performance.now() - t0, encodeMs }, [joints.buffer, frames.buffer]);
 }
 
 async function predict(msg) {

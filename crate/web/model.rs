@@ -9,7 +9,7 @@ use super::contexts::Contexts;
 use super::encoding::Encoding;
 use super::imitation::Imitation;
 use super::Episode;
-use crate::futures::{sample_unobserved, Sampling};
+use crate::futures::{draw_unobserved, frames_at, sample_unobserved, trajectories, Sampling};
 use crate::imitate::{self, Task};
 use crate::predict::{Observations, Predictor, SequencePrediction};
 use crate::quality::{score_sequence, Quality, Scenario};
@@ -96,11 +96,11 @@ impl ModelHandle {
     }
 
     /// S sampled futures at `targetTimes` of the observations `contexts` (`encodeContexts`;
-    /// autoregressive sampling, as `dmbn sample`, with its default grid, order and τ) with
-    /// `blend`: a `Float32Array(S × T × D)`, future by future, a row of D joint means per
-    /// target. The steps drawn are the targets that are not an observed time; future s is the
-    /// same for a `seed` whatever `samples` (1 to 256). Throws on bad input, contexts of another
-    /// model, or targets that are all observed.
+    /// as `dmbn sample` with its defaults: through the model's latent path where it has one,
+    /// autoregressively otherwise) with `blend`: a `Float32Array(S × T × D)`, future by future,
+    /// a row of D joint means per target. The steps imagined are the targets that are not an
+    /// observed time; future s is the same for a `seed` whatever `samples` (1 to 256). Throws
+    /// on bad input, contexts of another model, or targets that are all observed.
     pub fn sample(
         &self,
         contexts: &Contexts,
@@ -111,22 +111,45 @@ impl ModelHandle {
         #[wasm_bindgen(js_name = seed, unchecked_param_type = "number")] seed_value: JsValue,
     ) -> Result<Vec<f32>, JsError> {
         self.check_contexts(contexts)?;
-        let target_times = floats(&target_times, "targetTimes")?;
-        let blend = blend(&blend_value)?;
-        let samples = argument::integer(&samples, "samples", 1, Sampling::MAX_SAMPLES as u64)?;
-        let sampling = Sampling {
-            samples: samples as usize,
-            seed: seed(&seed_value)?,
-            ..Sampling::default()
-        };
-        let futures = sample_unobserved(
-            &self.inner,
-            &contexts.inner,
-            &target_times,
-            blend,
-            &sampling,
-        )?;
+        let (times, blend, sampling) =
+            sampling(&target_times, &blend_value, &samples, &seed_value)?;
+        let futures = sample_unobserved(&self.inner, &contexts.inner, &times, blend, &sampling)?;
         Ok(futures.iter().flat_map(|f| f.values().to_vec()).collect())
+    }
+
+    /// `sample`'s futures (the same for the same arguments: drawn once) with each one's mean
+    /// frame at the last of `targetTimes`, where it ends: `{joints, frames}`, `joints` as
+    /// `sample` returns them and `frames` a `Uint8Array(S × imageSize × imageSize × 3)` (RGB),
+    /// future by future. The page draws the futures' joints and their final frames. Throws as
+    /// `sample` does.
+    #[wasm_bindgen(js_name = sampleWithFrames, unchecked_return_type = "{joints: Float32Array, frames: Uint8Array}")]
+    pub fn sample_with_frames(
+        &self,
+        contexts: &Contexts,
+        #[wasm_bindgen(js_name = targetTimes, unchecked_param_type = "Float32Array")]
+        target_times: JsValue,
+        #[wasm_bindgen(js_name = blend, unchecked_param_type = "number")] blend_value: JsValue,
+        #[wasm_bindgen(unchecked_param_type = "number")] samples: JsValue,
+        #[wasm_bindgen(js_name = seed, unchecked_param_type = "number")] seed_value: JsValue,
+    ) -> Result<JsValue, JsError> {
+        self.check_contexts(contexts)?;
+        let (times, blend, sampling) =
+            sampling(&target_times, &blend_value, &samples, &seed_value)?;
+        let futures = draw_unobserved(&self.inner, &contexts.inner, &times, blend, &sampling)?;
+        let joints: Vec<f32> = trajectories(&self.inner, &futures, &times)?
+            .iter()
+            .flat_map(|rows| rows.values().to_vec())
+            .collect();
+        // Where each future ends (the targets are not empty: some are imagined).
+        let frames = frames_at(&self.inner, &futures, times[times.len() - 1])?.concat();
+        let out = js_sys::Object::new();
+        let set = |key: &str, value: JsValue| {
+            js_sys::Reflect::set(&out, &key.into(), &value)
+                .map_err(|_| JsError::new("could not build the futures' object"))
+        };
+        set("joints", js_sys::Float32Array::from(&joints[..]).into())?;
+        set("frames", js_sys::Uint8Array::from(&frames[..]).into())?;
+        Ok(out.into())
     }
 
     /// Encodes N observed steps, with the arguments of `predict` (without the target times),
@@ -401,4 +424,25 @@ impl Prediction {
     pub fn max_image_sigma(&self) -> f32 {
         self.inner.max_image_sigma()
     }
+}
+
+/// `sample`'s arguments: the target times, the blend and the sampling (the CLI's defaults,
+/// `samples` futures from `seed`).
+fn sampling(
+    target_times: &JsValue,
+    blend_value: &JsValue,
+    samples: &JsValue,
+    seed_value: &JsValue,
+) -> Result<(Vec<f32>, f32, Sampling), JsError> {
+    let samples = argument::integer(samples, "samples", 1, Sampling::MAX_SAMPLES as u64)?;
+    let sampling = Sampling {
+        samples: samples as usize,
+        seed: seed(seed_value)?,
+        ..Sampling::default()
+    };
+    Ok((
+        floats(target_times, "targetTimes")?,
+        blend(blend_value)?,
+        sampling,
+    ))
 }

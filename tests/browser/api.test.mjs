@@ -139,6 +139,11 @@ const ENTRIES = {
     args: () => [v.contexts, v.targets, 0.5, 2, 3],
     params: [["contexts", "Contexts"], "targetTimes", "blend", "samples", "seed"],
   },
+  "Model.sampleWithFrames": {
+    call: (a) => v.model.sampleWithFrames(...a),
+    args: () => [v.contexts, v.targets, 0.5, 2, 3],
+    params: [["contexts", "Contexts"], "targetTimes", "blend", "samples", "seed"],
+  },
   "Model.represent": { call: (a) => v.model.represent(...a), args: () => [v.contexts, 0.5], params: [["contexts", "Contexts"], "blend"] },
   "Model.score": {
     call: (a) => v.model.score(...a),

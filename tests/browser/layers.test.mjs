@@ -14,9 +14,9 @@ const WWW = join(dirname(fileURLToPath(import.meta.url)), "..", "..", "www");
 const LAYERS = [
   ["base", ["config.js", "ui.js", "events.js", "hooks.js"]],
   ["state", ["state.js", "status.js", "observations.js", "url.js"]],
-  ["drawing", ["views.js", "plot.js", "error_plot.js", "draw.js"]],
+  ["drawing", ["views.js", "plot.js", "error_plot.js", "strip.js", "draw.js"]],
   ["inference", ["wasm.js", "inference.js", "models.js", "worker.js", "encoded_steps.js"]],
-  ["controllers", ["playback.js", "imitate.js", "prediction.js", "live.js", "episodes.js", "folder.js", "changes.js"]],
+  ["controllers", ["playback.js", "imitate.js", "prediction.js", "live.js", "futures.js", "episodes.js", "folder.js", "changes.js"]],
   ["wiring", ["wire.js", "main.js"]],
 ];
 /** The worker's thread: it imports none of the page's modules, and they import none of its. */
