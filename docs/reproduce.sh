@@ -80,7 +80,7 @@ if [ "${TRAIN:-0}" = 1 ]; then
       sim/attn) stage attn "${first[@]}" --model attn --beta-nll 1 --encoder-filters 16,32,64,64,128 \
           --decoder-filters 128,64,32,32,16,16,8 --coarse-tail
         stage attn-2 "${longer[@]}" --init "$out/runs/attn/model.dmbn" --steps 2000 --seed 2
-        # Frames alone in 30% of the sequences (the mirror, `dmbn imitate`).
+        # Frames alone in 30% of the sequences (the imitation benchmark, `dmbn imitate`).
         single_modality=0.6 stage attn-3 --lr 5e-4 --beta-nll 1 --init "$out/runs/attn-2/best.dmbn" --steps 2000 --seed 3
         # Joints read from frames, frames alone in 90% of the sequences.
         single_modality=0.9 stage attn-4 --lr 5e-4 --beta-nll 1 --init "$out/runs/attn-3/model.dmbn" --frame-joints --steps 2000 --seed 5
@@ -139,11 +139,11 @@ if [ "${TRAIN:-0}" = 1 ]; then
       --out "$out/runs/$m-calibrated.dmbn"
     file[$m]=$out/runs/$m-calibrated.dmbn
   done
-  # The attentive model's mirror stage (docs/results.md, "The mirror stage"): fitted to the
+  # The attentive model's joint stage (docs/results.md, "The joint stage"): fitted to the
   # calibrated network on the network's own frames-only reads of the training ids.
   if [ "$set_name" = sim ] && [ -n "${file[attn]:-}" ]; then
-    "$bin/train" --init "${file[attn]}" --steps 0 --mirror --data "$data" --out "$out/runs/attn-mirror"
-    file[attn]=$out/runs/attn-mirror/model.dmbn
+    "$bin/train" --init "${file[attn]}" --steps 0 --joint-stage --data "$data" --out "$out/runs/attn-joint-stage"
+    file[attn]=$out/runs/attn-joint-stage/model.dmbn
   fi
 fi
 

@@ -1,4 +1,4 @@
-//! The best a mirror that performs *mean* joints could do from K evenly spaced glimpses of a
+//! The best a model that performs *mean* joints could do from K evenly spaced glimpses of a
 //! scripted push, when the timing is all it cannot see.
 //!
 //! For each push demonstration (the simulator's seeds SEED..SEED+N, as `dmbn simulate --seed

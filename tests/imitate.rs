@@ -1,6 +1,6 @@
-//! The mirror: the arm performs joint trajectories (recorded, predicted, wrong), the outcomes
-//! are judged, `dmbn imitate` reports them, and the golden imitation the wasm tests must agree
-//! with. Native only (the wasm tests are in tests/web.rs).
+//! The imitation benchmark: the arm performs joint trajectories (recorded, predicted, wrong),
+//! the outcomes are judged, `dmbn imitate` reports them, and the golden imitation the wasm
+//! tests must agree with. Native only (the wasm tests are in tests/web.rs).
 #![cfg(not(target_arch = "wasm32"))]
 
 mod golden;

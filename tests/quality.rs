@@ -259,11 +259,11 @@ fn the_default_model_is_no_worse_than_it_shipped() {
 
 /// From frames alone (blend 1; the page's Imitate mode) the default model reads the joints at
 /// the 5 observed steps, and fills in the rest, within [`TOLERANCE`] of the shipped file's
-/// figures on the unseen episodes: what the mirror performs from. It takes the place of the
-/// issue's 0.02 rad at the observed steps, which the attentive model meets by construction at
-/// blend 0.5 (it returns its observed joints) and misses from frames alone (0.0233 rad). The
-/// file without its mirror stage fails both bars (measured: 0.0329 and 0.0371 rad, 41% and
-/// 29% worse; at blend 0.5 it is the same model).
+/// figures on the unseen episodes: what the imitation benchmark performs from. It takes the
+/// place of the 0.02 rad at the observed steps, which the attentive model meets by
+/// construction at blend 0.5 (it returns its observed joints) and misses from frames alone
+/// (0.0233 rad). The file without its joint stage fails both bars (measured: 0.0329 and
+/// 0.0371 rad, 41% and 29% worse; at blend 0.5 it is the same model).
 #[test]
 fn from_frames_alone_the_default_model_reads_the_joints_as_well_as_it_shipped() {
     let (frames, _, motion) = default_model(Scenario::Interp, 1.0);

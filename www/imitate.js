@@ -1,4 +1,4 @@
-// Imitate mode, the mirror: the simulated arm performs the joints a model imagined from the
+// Imitate mode: the simulated arm performs the joints a model imagined from the
 // demonstration's observed steps (the wasm `enact`), or for comparison the demonstration's own
 // recorded joints (`replay`), or one of the futures it imagined (futures.js), with the object
 // where the demonstration had it. The performance's frames are drawn beside the
@@ -131,7 +131,7 @@ function show(performance) {
   describe();
 }
 
-/** The badge, the button and the note of the imitate panel (entering the mode: episodes.js). */
+/** The badge, the button and the note of imitate mode's panel (entering the mode: episodes.js). */
 export function describe() {
   const p = state.performance;
   performed(p);

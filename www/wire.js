@@ -114,8 +114,8 @@ export function wire() {
   const modeChanged = () => {
     if (!state.episode) return;
     const wasLive = state.shown?.mode === "live";
-    // The mirror sees frames only unless the viewer says otherwise, k evenly spaced ones (the
-    // benchmark's).
+    // Imitate mode sees frames only unless the viewer says otherwise, k evenly spaced ones (the
+    // imitation benchmark's).
     if (ui.mode.value === "imitate" && state.shown?.mode !== "imitate") {
       ui.observe.value = "images";
       chooseEven(ui.k.value);

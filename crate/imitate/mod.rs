@@ -1,4 +1,4 @@
-//! The mirror (Seker et al. 2022: a DMBN "connects observations with motor plans for
+//! The imitation benchmark (Seker et al. 2022: a DMBN "connects observations with motor plans for
 //! enaction"): shown a demonstration's frames, a model imagines its own joints, and the
 //! simulated arm performs them with the object where the demonstration had it. The outcome
 //! (did the grasp lift the object, did the push land it) is judged against the ceiling, the

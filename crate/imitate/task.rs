@@ -9,8 +9,8 @@ use crate::quality::Scenario;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Task {
-    /// K evenly spaced frames, no joints (blend 1 by default): the mirror's act. The whole
-    /// trajectory is the model's.
+    /// K evenly spaced frames, no joints (blend 1 by default): imitation from sight alone.
+    /// The whole trajectory is the model's.
     Frames,
     /// The first 30% observed at 3 steps, both modalities (blend 0.5 by default): the arm
     /// performs the observed part as recorded and the rest as predicted.

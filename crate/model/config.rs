@@ -99,15 +99,17 @@ pub struct ModelConfig {
     /// the joint decoder starts from those, interpolated as observed joints would be, instead
     /// of from nothing. Absent (older files) or false: it starts from nothing.
     pub frame_joints: Option<bool>,
-    /// Width of the mirror stage ([`super::Mirror`]): the file holds one, which gives the
+    /// Width of the joint stage ([`super::JointStage`]): the file holds one, which gives the
     /// joints wherever the observations are frames only (blend 1). Absent (older files, or
-    /// none fitted): the network's own joints.
+    /// none fitted): the network's own joints. Named `mirror`, the stage's old name, because
+    /// the field's name is its key in model files (burn's `Config` derive takes no serde
+    /// rename).
     pub mirror: Option<usize>,
     /// The attentive model: size L of a global latent z ([`super::LatentPath`]), drawn once
     /// per sampled future. Absent (older files): none; futures are drawn autoregressively.
     pub latent: Option<usize>,
     /// Joint values a step (D), read from the training data: sizes the joint encoder, the
-    /// joint decoder's heads, the attentive model's read-out and the mirror stage. Absent
+    /// joint decoder's heads, the attentive model's read-out and the joint stage. Absent
     /// (files written before other robots): 7, the original arm's.
     pub joints: Option<usize>,
     /// A name for each joint value (from the dataset's `dataset.json`); absent where the data
@@ -165,7 +167,7 @@ impl ModelConfig {
         if self.mirror == Some(0) {
             return Err(ModelError::config(
                 "mirror",
-                "is 0: expected the width of the mirror stage's layers (at least 1), or none",
+                "is 0: expected the width of the joint stage's layers (at least 1), or none",
             ));
         }
         if self.kind == ModelKind::Attn {

@@ -62,7 +62,8 @@ pub struct DmbnAttn {
     /// Shared layer, image and joint decoders.
     pub decoder: Decoder,
     /// H → D: the joints read from an image context encoding, where the joint decoder starts
-    /// when joints are not observed (the mirror: frames only). None in files without it.
+    /// when joints are not observed (frames only, as `dmbn imitate` observes). None in files
+    /// without it.
     pub frame_joints: Option<Linear>,
     /// The global latent z (`ModelConfig::latent`): what the contexts leave open, drawn once
     /// per sampled future. None in files without it.

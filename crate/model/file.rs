@@ -12,6 +12,9 @@
 //! ```
 //!
 //! Nothing may follow the weights. The header's `weights.sha256` covers the W weight bytes.
+//! A joint stage ([`super::JointStage`]) is stored under its old name, `mirror`: its width
+//! as the config's `mirror`, its tensors as `mirror.…`, so that files written before the
+//! rename load as they were.
 use burn::module::Module;
 use burn::store::{BurnpackStore, HalfPrecisionAdapter, ModuleSnapshot};
 use burn::tensor::{Bytes, Device};

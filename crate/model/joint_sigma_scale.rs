@@ -1,12 +1,5 @@
 use serde::{Deserialize, Serialize};
 
-/// Whether target time `t` lies within `span`, the first and the last observed time: between
-/// the observations, where a calibration's `between` factor and a mirror stage apply;
-/// outside, forecasting.
-pub fn within_span(t: f32, span: (f32, f32)) -> bool {
-    (span.0..=span.1).contains(&t)
-}
-
 /// A calibration's factors on the predicted joint σ (`dmbn calibrate`), fitted after training
 /// on sequences the model did not train on: one between the observations, one when
 /// forecasting outside their span (before the first observed time or after the last), where
@@ -27,9 +20,10 @@ impl JointSigmaScale {
         forecast: None,
     };
 
-    /// The factor at target time `t` for observations whose times span `span` (first, last).
-    pub fn at(&self, t: f32, span: (f32, f32)) -> f32 {
-        if within_span(t, span) {
+    /// The factor at a target time between the observations or, when not, outside them
+    /// (see [`crate::predict::Encoding::is_between_observations`]).
+    pub fn factor(&self, between_observations: bool) -> f32 {
+        if between_observations {
             self.between
         } else {
             self.forecast.unwrap_or(self.between)
@@ -52,23 +46,21 @@ mod tests {
     use super::*;
 
     #[test]
-    fn the_forecast_factor_applies_outside_the_observed_span_only() {
+    fn the_forecast_factor_applies_outside_the_observations_only() {
         let scale = JointSigmaScale {
             between: 1.5,
             forecast: Some(0.5),
         };
-        assert_eq!(scale.at(0.2, (0.2, 0.6)), 1.5);
-        assert_eq!(scale.at(0.6, (0.2, 0.6)), 1.5);
-        assert_eq!(scale.at(0.61, (0.2, 0.6)), 0.5);
-        assert_eq!(scale.at(0.1, (0.2, 0.6)), 0.5);
+        assert_eq!(scale.factor(true), 1.5);
+        assert_eq!(scale.factor(false), 0.5);
         let single = JointSigmaScale {
             between: 2.0,
             forecast: None,
         };
-        assert_eq!(single.at(0.9, (0.2, 0.6)), 2.0);
-        assert_eq!(JointSigmaScale::NONE.at(0.9, (0.2, 0.6)), 1.0);
+        assert_eq!(single.factor(false), 2.0);
+        assert_eq!(JointSigmaScale::NONE.factor(false), 1.0);
         let again = single.then(scale);
-        assert_eq!(again.at(0.3, (0.2, 0.6)), 3.0);
-        assert_eq!(again.at(0.9, (0.2, 0.6)), 1.0);
+        assert_eq!(again.factor(true), 3.0);
+        assert_eq!(again.factor(false), 1.0);
     }
 }

@@ -30,12 +30,12 @@ mod interpolation;
 mod joint_decoder;
 mod joint_encoder;
 mod joint_sigma_scale;
+mod joint_stage;
+mod joint_stage_inputs;
 mod kernels;
 mod latent_path;
 mod loss;
 mod maps;
-mod mirror;
-mod mirror_inputs;
 #[allow(clippy::module_inception)]
 mod model;
 mod prediction;
@@ -70,11 +70,13 @@ pub use init::{glorot, Initialization};
 pub use interpolation::{gaps, interpolation_tensors, linear_weights};
 pub use joint_decoder::{JointDecoder, JointDecoderConfig};
 pub use joint_encoder::{JointEncoder, JointEncoderConfig};
-pub use joint_sigma_scale::{within_span, JointSigmaScale};
+pub use joint_sigma_scale::JointSigmaScale;
+pub use joint_stage::{JointStage, JointStageConfig, JOINT_STAGE_LAYERS, JOINT_STAGE_SIGMA_FLOOR};
+pub use joint_stage_inputs::{
+    joint_stage_input_len, joint_stage_inputs, JOINT_STAGE_FREQUENCIES, JOINT_STAGE_SLOTS,
+};
 pub use latent_path::{kl_divergence, LatentGaussian, LatentPath, LatentPathConfig};
 pub use loss::{gaussian_loss, joint_nll, Loss, LossValues};
-pub use mirror::{Mirror, MirrorConfig, MIRROR_LAYERS, MIRROR_SIGMA_FLOOR};
-pub use mirror_inputs::{mirror_input_len, mirror_inputs, MIRROR_FREQUENCIES, MIRROR_SLOTS};
 pub use model::{Model, Network};
 pub use prediction::{AttentiveContexts, ContextEncodings, Prediction, Representation};
 #[cfg(not(target_arch = "wasm32"))]

@@ -6,8 +6,9 @@ use super::dmbn_attn::DmbnAttn;
 use super::dmbn_pte::DmbnPte;
 use super::loss::{gaussian_loss, Loss};
 use super::{
-    BatchTensors, ContextEncodings, Decoder, EncodedContexts, ImageEncoder, LatentGaussian, Mirror,
-    MirrorConfig, ModelConfig, ModelError, ModelKind, Prediction, Representation, Start,
+    BatchTensors, ContextEncodings, Decoder, EncodedContexts, ImageEncoder, JointStage,
+    JointStageConfig, LatentGaussian, ModelConfig, ModelError, ModelKind, Prediction,
+    Representation, Start,
 };
 
 /// One of the three networks.
@@ -30,8 +31,10 @@ pub enum Network {
 pub struct Model {
     /// The network's weights.
     pub network: Network,
-    /// The mirror stage, where the file has one (`ModelConfig::mirror`).
-    pub mirror: Option<Mirror>,
+    /// The joint stage, where the file has one ([`Model::joint_stage`]). Named `mirror`, the
+    /// stage's old name, because a field's name is its tensors' name in the model file
+    /// (`mirror.layers.0.weight` …): renaming it would orphan every shipped file's stage.
+    mirror: Option<JointStage>,
     /// What built it (kind, sizes, σ floor, loss weight).
     #[module(skip)]
     config: ModelConfig,
@@ -57,7 +60,7 @@ impl ModelConfig {
         Ok(Model {
             network,
             mirror: self.mirror.map(|width| {
-                MirrorConfig::new()
+                JointStageConfig::new()
                     .with_width(width)
                     .with_joints(self.joint_count())
                     .init(device)
@@ -172,19 +175,25 @@ impl Model {
         Ok(Representation::Attentive(contexts))
     }
 
-    /// The model with `mirror` as its mirror stage (replacing any it had).
-    pub fn with_mirror(self, mirror: Mirror) -> Model {
-        let width = mirror.width();
+    /// The joint stage, where the model has one: the joints from frames alone, between the
+    /// observations.
+    pub fn joint_stage(&self) -> Option<&JointStage> {
+        self.mirror.as_ref()
+    }
+
+    /// The model with `stage` as its joint stage (replacing any it had).
+    pub fn with_joint_stage(self, stage: JointStage) -> Model {
+        let width = stage.width();
         Model {
             network: self.network,
-            mirror: Some(mirror),
+            mirror: Some(stage),
             config: self.config.with_mirror(Some(width)),
         }
     }
 
-    /// The model without a mirror stage (its network changes: the stage learnt the old one's
+    /// The model without a joint stage (its network changes: the stage learnt the old one's
     /// reads).
-    pub fn without_mirror(self) -> Model {
+    pub fn without_joint_stage(self) -> Model {
         Model {
             network: self.network,
             mirror: None,

@@ -4,8 +4,8 @@
 //! hyperparameters, image size, joint normalisation) as the metadata entry `dmbn`.
 //!
 //! Names are the model's module paths without the `network` prefix and the variant
-//! (`decoder.shared.weight`, `image_attention.query.bias` …; the mirror stage's
-//! `mirror.layers.0.weight` …); burn-store's PyTorch adapters
+//! (`decoder.shared.weight`, `image_attention.query.bias` …; the joint stage's, under its
+//! old name, `mirror.layers.0.weight` …); burn-store's PyTorch adapters
 //! transpose the Linear weights and rename LayerNorm's gamma/beta. Export and import go
 //! through the model file's bytes, so what is imported runs wherever a model file does.
 use std::collections::HashMap;

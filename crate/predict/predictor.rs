@@ -4,8 +4,8 @@ use super::{Encoding, Observations, Reads, SequencePrediction};
 use crate::augment::Batch;
 use crate::data::Joints;
 use crate::model::{
-    self, tensors, within_span, EncodedContexts, JointSigmaScale, Model, ModelError, ModelKind,
-    Normalization, Representation,
+    self, tensors, EncodedContexts, JointSigmaScale, Model, ModelError, ModelKind, Normalization,
+    Representation,
 };
 
 /// A trained model ready for inference on the CPU (flex backend): encode observations once,
@@ -131,8 +131,8 @@ impl Predictor {
                 (lo.min(t), hi.max(t))
             });
         let representation = self.model.represent(contexts, c)?;
-        // The mirror stage answers for frames only, from what the network reads there.
-        let reads = match &self.model.mirror {
+        // The joint stage answers for frames only, from what the network reads there.
+        let reads = match self.model.joint_stage() {
             Some(_) if blend == 1.0 && !observed.is_empty() => Some(Reads {
                 joints: self.network_joints(&representation, &observed)?,
                 times: observed,
@@ -173,22 +173,20 @@ impl Predictor {
                 .decode(&encoding.representation, self.times(chunk))?;
             let mut joint_sigma = model::values(p.joint_sigma);
             for (row, &t) in joint_sigma.chunks_exact_mut(d).zip(chunk) {
-                let scale = self.joint_sigma_scale.at(t, encoding.span);
+                let scale = self
+                    .joint_sigma_scale
+                    .factor(encoding.is_between_observations(t));
                 row.iter_mut().for_each(|s| *s *= scale);
             }
             let mut joint_mean = model::values(p.joint_mean);
-            if let Some((mean, sigma)) = self.mirrored(encoding, chunk) {
-                for (k, &t) in chunk.iter().enumerate() {
-                    if within_span(t, encoding.span) {
-                        let row = k * d..(k + 1) * d;
-                        joint_mean[row.clone()]
-                            .copy_from_slice(&self.normalization.normalize(&mean[k]));
-                        for (j, s) in joint_sigma[row].iter_mut().enumerate() {
-                            *s = sigma[k][j] / self.normalization.std[j];
-                        }
-                    }
+            // The stage's joints in the decoders' units (normalised), as `push` takes them.
+            self.splice_joint_stage(encoding, chunk, |k, mean, sigma| {
+                let row = k * d..(k + 1) * d;
+                joint_mean[row.clone()].copy_from_slice(&self.normalization.normalize(mean));
+                for (j, s) in joint_sigma[row].iter_mut().enumerate() {
+                    *s = sigma[j] / self.normalization.std[j];
                 }
-            }
+            });
             out.push(
                 chunk,
                 &model::values(p.image_mean),
@@ -201,13 +199,26 @@ impl Predictor {
         Ok(out)
     }
 
-    /// The mirror stage's joint means and σ at `targets` (radians and gripper units), where
-    /// `encoding` has reads for it; they stand between the first and the last observation
-    /// (the stage interpolates), the network's beyond them. Its σ was fitted on reads of
-    /// held-out sequences, so the file's σ scales (fitted to the network's σ) leave it as it is.
-    fn mirrored(&self, encoding: &Encoding, targets: &[f32]) -> Option<(Joints, Joints)> {
-        let (mirror, reads) = (self.model.mirror.as_ref()?, encoding.reads.as_ref()?);
-        Some(mirror.predict(&reads.times, &reads.joints, targets, &self.device))
+    /// Where `encoding` has reads for the joint stage: for each of `targets` between the first
+    /// and the last observation (the stage interpolates; beyond them the network's joints
+    /// stand), `splice(k, mean, σ)` with the stage's joints at target k, in radians and gripper
+    /// units. Its σ was fitted on reads of held-out sequences, so the file's σ scales (fitted
+    /// to the network's σ) leave it as it is.
+    fn splice_joint_stage(
+        &self,
+        encoding: &Encoding,
+        targets: &[f32],
+        mut splice: impl FnMut(usize, &[f32], &[f32]),
+    ) {
+        let (Some(stage), Some(reads)) = (self.model.joint_stage(), encoding.reads.as_ref()) else {
+            return;
+        };
+        let (mean, sigma) = stage.predict(&reads.times, &reads.joints, targets, &self.device);
+        for (k, &t) in targets.iter().enumerate() {
+            if encoding.is_between_observations(t) {
+                splice(k, &mean[k], &sigma[k]);
+            }
+        }
     }
 
     /// Encode `observations`, then decode `target_times`.
@@ -235,7 +246,7 @@ impl Predictor {
     }
 
     /// Only the joint means at `target_times` for `encoding`: the image decoder, most of a
-    /// target's cost, is skipped; frames only (blend 1), a model's mirror stage gives them
+    /// target's cost, is skipped; frames only (blend 1), a model's joint stage gives them
     /// between the first and the last observation (see [`Encoding::reads`]).
     pub fn decode_joints(
         &self,
@@ -244,13 +255,9 @@ impl Predictor {
     ) -> Result<Joints, ModelError> {
         check_times(target_times)?;
         let mut rows = self.network_joints(&encoding.representation, target_times)?;
-        if let Some((mean, _)) = self.mirrored(encoding, target_times) {
-            for (k, &t) in target_times.iter().enumerate() {
-                if within_span(t, encoding.span) {
-                    rows.row_mut(k).copy_from_slice(&mean[k]);
-                }
-            }
-        }
+        self.splice_joint_stage(encoding, target_times, |k, mean, _| {
+            rows.row_mut(k).copy_from_slice(mean)
+        });
         Ok(rows)
     }
 
@@ -275,7 +282,7 @@ impl Predictor {
     }
 
     /// The joints the network reads from frames alone (blend 1) at each observed time, in
-    /// radians (and gripper units): what the mirror stage starts from, and learns from.
+    /// radians (and gripper units): what the joint stage starts from, and learns from.
     pub fn reads(&self, observations: &Observations) -> Result<Joints, ModelError> {
         let encoding = self.encode(observations, 1.0)?;
         match encoding.reads {

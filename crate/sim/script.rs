@@ -16,7 +16,7 @@ use super::{Action, Plan};
 /// A scripted action before it is timed: from home, the grasp point moves through segments,
 /// each to a pose (smoothstep easing) while the closure goes linearly to its value, over a
 /// duration drawn from its range. An episode draws the durations ([`Simulator::script`]);
-/// an experiment may time the same motion otherwise (`examples/push_oracle.rs`).
+/// an experiment may time the same motion otherwise (`experiments/push_oracle.rs`).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Script {
     /// Where the grasp point starts.

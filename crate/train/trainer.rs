@@ -107,9 +107,9 @@ impl Trainer {
                 )
                 .map_err(|e| TrainError::config("init", format!("{}: {e}", path.display())))?
                 .0
-                // A mirror stage learnt the file's network's reads: training leaves it behind
-                // (`--mirror` fits one to the result).
-                .without_mirror();
+                // A joint stage learnt the file's network's reads: training leaves it behind
+                // (`--joint-stage` fits one to the result).
+                .without_joint_stage();
                 if model.joint_count() != width {
                     return Err(TrainError::config(
                         "init",

@@ -258,12 +258,12 @@ impl ModelHandle {
             .map_err(|e| JsError::new(&e.to_string()))
     }
 
-    /// The mirror on one demonstration (what `dmbn imitate` does per sequence): the model
-    /// observes `episode` (an episode of `action`, `"grasp"` or `"move"`) as `task` asks —
-    /// `"frames"`: `observations` evenly spaced steps, the arm performs the whole predicted
-    /// trajectory; `"finish"`: the first 30% at 3 steps, performed as recorded, then the
-    /// prediction — with `blend` (1 = frames only, the mirror's act; `"finish"` uses 0.5 in
-    /// `dmbn imitate`), and the simulated arm performs the predicted joint means with the
+    /// The imitation benchmark on one demonstration (what `dmbn imitate` does per sequence):
+    /// the model observes `episode` (an episode of `action`, `"grasp"` or `"move"`) as `task`
+    /// asks — `"frames"`: `observations` evenly spaced steps, the arm performs the whole
+    /// predicted trajectory; `"finish"`: the first 30% at 3 steps, performed as recorded, then
+    /// the prediction — with `blend` (1 = frames only, `"frames"`' default; `"finish"` uses 0.5
+    /// in `dmbn imitate`), and the simulated arm performs the predicted joint means with the
     /// object where the episode had it. Returns an `Imitation`, `undefined` when the episode
     /// is too short for the task. Throws on bad arguments.
     pub fn imitate(

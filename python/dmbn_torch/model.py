@@ -12,7 +12,7 @@ import torch
 import torch.nn as nn
 import torch.nn.functional as F
 
-from .mirror import Mirror
+from .joint_stage import JointStage
 
 # Architecture constants of crate/model (the original DMBN's widths).
 ENCODER_FILTERS = {64: [32, 64, 128, 128, 256], 128: [32, 64, 64, 128, 128, 256]}
@@ -520,9 +520,10 @@ class Predictor(nn.Module):
         if names is not None and len(names) != self.joints:
             raise ValueError(f"joint_names: {len(names)} names, expected {self.joints}")
         self.network = KINDS[self.config["kind"]](self.config)
-        # The mirror stage, where the file has one: the joints from frames alone (blend 1).
-        mirror = self.config.get("mirror")
-        self.mirror = Mirror(mirror, self.joints) if mirror else None
+        # The joint stage, where the file has one: the joints from frames alone (blend 1).
+        # Under its old name, `mirror`, as in the file: the config key and the tensors' prefix.
+        width = self.config.get("mirror")
+        self.mirror = JointStage(width, self.joints) if width else None
 
     def state_dict_for_export(self):
         return {k.removeprefix("network."): v for k, v in self.state_dict().items()}
@@ -559,11 +560,11 @@ class Predictor(nn.Module):
             # observation, its σ its own (fitted on held-out reads).
             observed = contexts.times[0]
             reads = self.network.decode_joints(r, observed.unsqueeze(0))[0][0] * std + mean
-            mirror_mean, mirror_sigma = (v.to(device) for v in self.mirror.predict(
+            stage_mean, stage_sigma = (v.to(device) for v in self.mirror.predict(
                 observed.cpu(), reads.cpu(), target_times.cpu()))
             within = ((target_times >= observed.min()) & (target_times <= observed.max())).unsqueeze(1)
-            joint_mean = torch.where(within, mirror_mean, joint_mean)
-            joint_sigma = torch.where(within, mirror_sigma, joint_sigma)
+            joint_mean = torch.where(within, stage_mean, joint_mean)
+            joint_sigma = torch.where(within, stage_sigma, joint_sigma)
         return {
             "image_mean": out["image_mean"].permute(0, 2, 3, 1),
             "image_sigma": out["image_sigma"].permute(0, 2, 3, 1),

@@ -115,8 +115,9 @@ def train_config(args):
             raise ValueError(f"--init {args.init}: the model has a latent path, which the "
                              "PyTorch twin predicts with but does not train (its KL term): "
                              "train it with the Rust `train`")
-        # A mirror stage learnt the file's network's reads: training the network leaves it
-        # behind (`train --init FILE --steps 0 --mirror` fits one to the result).
+        # A joint stage (the config's `mirror`) learnt the file's network's reads: training the
+        # network leaves it behind (`train --init FILE --steps 0 --joint-stage` fits one to the
+        # result).
         model = dict(file, joint_weight=args.joint_weight, mirror=None,
                      frame_joints=True if args.frame_joints else file.get("frame_joints"))
     elif not args.model:

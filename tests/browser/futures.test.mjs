@@ -152,7 +152,7 @@ describe("sampled futures", () => {
     await shot(page, "futures-imitate");
     await cells.nth(2).click();
     await page.waitForFunction(() => document.body.dataset.performed === "imagined");
-    // Frames only (the mirror's default): the joints drawn step by step weigh nothing (blend
+    // Frames only (imitate mode's default): the joints drawn step by step weigh nothing (blend
     // 1), so the autoregressive futures coincide, and the page says so (when they do).
     const done = await imagined();
     await page.selectOption("#observe", "images");

@@ -1,4 +1,4 @@
-// Imitate mode (the mirror): the simulated arm performs the joints a model imagined from the
+// Imitate mode: the simulated arm performs the joints a model imagined from the
 // frames it saw, beside the demonstration, with the outcome in a badge; the demonstration's
 // own joints for comparison; a model whose joints cannot be performed, or a bad file, gives a
 // message and the page carries on.
@@ -73,7 +73,7 @@ describe("imitate mode", () => {
 
   test("the robot performs the joints it imagined from frames alone, and the outcome is shown", async () => {
     const { page, len } = await openImitate();
-    // Frames only by default, the σ overlay replaced by the mirror's panel.
+    // Frames only by default, the σ overlay replaced by imitate mode's panel.
     assert.equal(await page.inputValue("#observe"), "images");
     assert.equal(await page.locator("#imitate-panel").isVisible(), true);
     assert.equal(await page.locator("#sigma-panel").isHidden(), true);

@@ -44,9 +44,9 @@ pub struct CalibrateArgs {
 /// their span (forecasting), where a model errs differently.
 pub fn run(args: CalibrateArgs) -> Result<(), CliError> {
     let predictor = Predictor::load(&args.model)?;
-    if predictor.model().mirror.is_some() && args.blend == 1.0 {
+    if predictor.model().joint_stage().is_some() && args.blend == 1.0 {
         return Err(CliError::Usage(format!(
-            "{}: --blend 1: this file's mirror stage answers frames-only predictions between the \
+            "{}: --blend 1: this file's joint stage answers frames-only predictions between the \
              observations with its own σ (fitted with the stage), which the scales do not touch; \
              calibrate the network's σ at a blend below 1",
             args.model.display()

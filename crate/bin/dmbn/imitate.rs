@@ -1,4 +1,4 @@
-//! `dmbn imitate`: the mirror benchmark (models see a demonstration, the simulated arm
+//! `dmbn imitate`: the imitation benchmark (models see a demonstration, the simulated arm
 //! performs what they imagine).
 use std::collections::btree_map::Entry;
 use std::collections::BTreeMap;

@@ -97,7 +97,8 @@ enum Command {
     /// factor that makes ±2σ cover 95.45% of them in its header; every prediction of the file
     /// (natively, in the page, in the PyTorch twin) applies it.
     Calibrate(calibrate::CalibrateArgs),
-    /// The mirror: models see a demonstration and the simulated arm performs what they imagine.
+    /// The imitation benchmark: models see a demonstration and the simulated arm performs
+    /// what they imagine.
     ///
     /// frames: K evenly spaced frames observed (no joints), the arm performs the predicted
     /// joint means; finish: the first 30% observed, performed as recorded, then the

@@ -1,8 +1,8 @@
-//! The mirror stage: a fresh one predicts the interpolated reads and only frames-only
+//! The joint stage: a fresh one predicts the interpolated reads and only frames-only
 //! predictions use it, it survives the model file, bad files are refused, fitting it lowers
 //! the error of the reads' interpolation on demonstrations it did not see, the shipped one
-//! beats its network on unseen demonstrations (joints and pushes), and `train --mirror` adds
-//! one to a model file.
+//! beats its network on unseen demonstrations (joints and pushes), and `train --joint-stage`
+//! adds one to a model file.
 #![cfg(not(target_arch = "wasm32"))]
 
 mod support;
@@ -10,19 +10,19 @@ mod support;
 use burn::tensor::{Device, Tensor, TensorData};
 use dmbn::data::{Joints, JOINTS};
 use dmbn::imitate::{imitate, Task};
-use dmbn::model::{self, Mirror, MirrorConfig, ModelError};
+use dmbn::model::{self, JointStage, JointStageConfig, ModelError};
 use dmbn::predict::{Observations, Predictor};
 use dmbn::sim::{episode, Action};
-use dmbn::train::{fit_mirror, MirrorExamples, MirrorFit};
+use dmbn::train::{fit_joint_stage, JointStageExamples, JointStageFit};
 use rand::SeedableRng;
 
 /// The page's default model file with its network alone (`stage`: none) or with `stage`.
-fn shipped_with(stage: Option<Mirror>) -> Vec<u8> {
+fn shipped_with(stage: Option<JointStage>) -> Vec<u8> {
     let bytes = std::fs::read(support::asset("models/attn-sim.dmbn")).unwrap();
     let (model, header) = model::load_with_header(&bytes, &Device::flex(), None, None).unwrap();
     let model = match stage {
-        Some(stage) => model.with_mirror(stage),
-        None => model.without_mirror(),
+        Some(stage) => model.with_joint_stage(stage),
+        None => model.without_joint_stage(),
     };
     let bytes = model::save_bytes(&model, &header.normalization, false).unwrap();
     model::with_joint_sigma_scale(&bytes, header.joint_sigma_scales()).unwrap()
@@ -30,7 +30,7 @@ fn shipped_with(stage: Option<Mirror>) -> Vec<u8> {
 
 /// The page's default network with a fresh (zero-correction) stage, and its file's bytes.
 fn with_fresh_stage() -> (Predictor, Vec<u8>) {
-    let bytes = shipped_with(Some(MirrorConfig::new().init(&Device::flex())));
+    let bytes = shipped_with(Some(JointStageConfig::new().init(&Device::flex())));
     (Predictor::from_bytes(&bytes).unwrap(), bytes)
 }
 
@@ -96,7 +96,7 @@ fn a_fresh_stage_predicts_the_reads_interpolated_and_only_from_frames_alone() {
 #[test]
 fn the_page_s_default_model_ships_with_a_stage_that_corrects_its_network() {
     let shipped = Predictor::load(support::asset("models/attn-sim.dmbn")).unwrap();
-    assert!(shipped.model().mirror.is_some());
+    assert!(shipped.model().joint_stage().is_some());
     let plain = network_only();
     let demo = episode(Action::Move, 701, 64).unwrap();
     let t = demo.len();
@@ -132,7 +132,7 @@ fn the_stage_survives_the_file_and_bad_files_are_refused() {
         again.predict_joints(&observed, &times, 1.0).unwrap()
     );
     // A header that promises a stage the weights lack, or weights with a stage the header
-    // does not name.
+    // does not name: both named by the stage's key in the file, `mirror`.
     let plain = shipped_with(None);
     let (model, header) = model::load_with_header(&plain, &Device::flex(), None, None).unwrap();
     let promised = header.config.clone().with_mirror(Some(256));
@@ -173,7 +173,7 @@ fn replace_config(bytes: &[u8], config: &serde_json::Value) -> Vec<u8> {
 }
 
 /// The mean squared error of the reads' interpolation over `examples`.
-fn interpolation_mse(examples: &MirrorExamples) -> f64 {
+fn interpolation_mse(examples: &JointStageExamples) -> f64 {
     let se: f64 = examples
         .start
         .iter()
@@ -191,9 +191,9 @@ fn reads_of(
     seed: u64,
     per_action: u64,
     draws: usize,
-) -> (MirrorExamples, usize) {
+) -> (JointStageExamples, usize) {
     let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
-    let (mut examples, mut steps) = (MirrorExamples::new(JOINTS), 0);
+    let (mut examples, mut steps) = (JointStageExamples::new(JOINTS), 0);
     for i in 0..per_action {
         for action in Action::ALL {
             let demo = episode(action, seed + i, 64).unwrap();
@@ -204,13 +204,13 @@ fn reads_of(
     (examples, steps)
 }
 
-/// The RMSE of `mirror`'s mean joints over `examples` (every joint value).
-fn stage_rmse(mirror: &Mirror, examples: &MirrorExamples, device: &Device) -> f64 {
+/// The RMSE of `stage`'s mean joints over `examples` (every joint value).
+fn stage_rmse(stage: &JointStage, examples: &JointStageExamples, device: &Device) -> f64 {
     let (rows, d) = (examples.rows(), examples.joints);
     let tensor = |values: &[f32], width: usize| {
         Tensor::from_data(TensorData::new(values.to_vec(), [rows, width]), device)
     };
-    let (mean, _) = mirror.forward(
+    let (mean, _) = stage.forward(
         tensor(&examples.x, examples.features()),
         tensor(&examples.start, d),
     );
@@ -241,7 +241,7 @@ fn fitting_the_stage_lowers_the_error_of_the_interpolated_reads_on_unseen_demons
         "the steps from the first glimpse to the last: {} of {most}",
         train.rows()
     );
-    let fit = MirrorFit {
+    let fit = JointStageFit {
         width: 32,
         draws: 3,
         steps: 400,
@@ -251,18 +251,18 @@ fn fitting_the_stage_lowers_the_error_of_the_interpolated_reads_on_unseen_demons
     };
     let device = Device::flex().autodiff();
     let mut last = None;
-    let mirror = fit_mirror(&train, None, fit, &device, |p| last = Some(p)).unwrap();
+    let stage = fit_joint_stage(&train, None, fit, &device, |p| last = Some(p)).unwrap();
     let last = last.expect("progress at the end");
     assert_eq!(last.step, 400);
-    assert_eq!(mirror.width(), 32);
+    assert_eq!(stage.width(), 32);
     let (interpolated, corrected) = (
         interpolation_mse(&held_out).sqrt(),
-        stage_rmse(&mirror, &held_out, &device),
+        stage_rmse(&stage, &held_out, &device),
     );
     println!(
         "held out: the stage's RMSE {corrected:.4} against the interpolation's {interpolated:.4} \
          (training reads: {:.4} against {:.4})",
-        stage_rmse(&mirror, &train, &device),
+        stage_rmse(&stage, &train, &device),
         interpolation_mse(&train).sqrt()
     );
     assert!(
@@ -270,8 +270,8 @@ fn fitting_the_stage_lowers_the_error_of_the_interpolated_reads_on_unseen_demons
         "on unseen demonstrations the stage's RMSE {corrected} against the interpolation's \
          {interpolated}"
     );
-    let empty = MirrorExamples::new(JOINTS);
-    let err = fit_mirror(&empty, None, fit, &device, |_| {}).unwrap_err();
+    let empty = JointStageExamples::new(JOINTS);
+    let err = fit_joint_stage(&empty, None, fit, &device, |_| {}).unwrap_err();
     assert!(err.to_string().contains("no training examples"), "{err}");
 }
 
@@ -326,7 +326,7 @@ fn the_shipped_stage_beats_its_network_on_unseen_demonstrations() {
 }
 
 #[test]
-fn train_mirror_adds_a_stage_to_a_model_file() {
+fn train_joint_stage_adds_a_stage_to_a_model_file() {
     let tmp = tempfile::tempdir().unwrap();
     let data = tmp.path().join("data");
     support::simulated_dataset(&data, 0..4, &Action::ALL, 900);
@@ -341,12 +341,12 @@ fn train_mirror_adds_a_stage_to_a_model_file() {
             "0.25",
         ])
         .args([
-            "--mirror",
-            "--mirror-steps",
+            "--joint-stage",
+            "--joint-stage-steps",
             "50",
-            "--mirror-draws",
+            "--joint-stage-draws",
             "1",
-            "--mirror-width",
+            "--joint-stage-width",
             "16",
         ])
         .arg("--init")
@@ -360,7 +360,7 @@ fn train_mirror_adds_a_stage_to_a_model_file() {
     let stderr = String::from_utf8_lossy(&run.stderr);
     assert!(run.status.success(), "{stderr}");
     assert!(
-        stderr.contains("fitting the mirror stage: 6 training and 2 validation"),
+        stderr.contains("fitting the joint stage: 6 training and 2 validation"),
         "{stderr}"
     );
     let bytes = std::fs::read(out.join("model.dmbn")).unwrap();
@@ -377,7 +377,7 @@ fn train_mirror_adds_a_stage_to_a_model_file() {
     );
     assert_eq!(header.weights.dtype, shipped.weights.dtype);
     Predictor::from_bytes(&bytes).unwrap();
-    // Without a model to fit to, or with nothing to read.
+    // Nothing to read; the stage's old name still works on the command line.
     let bad = std::process::Command::new(env!("CARGO_BIN_EXE_train"))
         .args(["--steps", "0", "--mirror", "--mirror-draws", "0"])
         .arg("--init")
@@ -390,7 +390,7 @@ fn train_mirror_adds_a_stage_to_a_model_file() {
         .unwrap();
     let stderr = String::from_utf8_lossy(&bad.stderr);
     assert!(!bad.status.success());
-    assert!(stderr.contains("mirror_draws"), "{stderr}");
+    assert!(stderr.contains("joint_stage_draws"), "{stderr}");
 }
 
 #[test]
@@ -411,7 +411,7 @@ fn calibrating_frames_only_predictions_of_a_file_with_a_stage_is_refused() {
     let stderr = String::from_utf8_lossy(&run.stderr);
     assert!(!run.status.success());
     assert!(
-        stderr.contains("mirror stage") && stderr.contains("blend below 1"),
+        stderr.contains("joint stage") && stderr.contains("blend below 1"),
         "{stderr}"
     );
     assert!(!tmp.path().join("out.dmbn").exists());

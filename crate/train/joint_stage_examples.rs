@@ -1,16 +1,16 @@
 use rand::{Rng, RngExt};
 
 use crate::data::Sequence;
-use crate::model::{mirror_input_len, mirror_inputs, ModelError, MIRROR_SLOTS};
+use crate::model::{joint_stage_input_len, joint_stage_inputs, ModelError, JOINT_STAGE_SLOTS};
 use crate::predict::{Observations, Predictor};
 
-/// What the mirror stage learns from: per target step of a demonstration seen at some
-/// glimpses, its inputs ([`mirror_inputs`]), the interpolated reads and the true joints.
+/// What the joint stage learns from: per target step of a demonstration seen at some
+/// glimpses, its inputs ([`joint_stage_inputs`]), the interpolated reads and the true joints.
 #[derive(Debug, Clone, Default)]
-pub struct MirrorExamples {
+pub struct JointStageExamples {
     /// D: joint values a step.
     pub joints: usize,
-    /// `rows × mirror_input_len(D)`.
+    /// `rows × joint_stage_input_len(D)`.
     pub x: Vec<f32>,
     /// `rows × D`: the reads interpolated at the target.
     pub start: Vec<f32>,
@@ -18,10 +18,10 @@ pub struct MirrorExamples {
     pub truth: Vec<f32>,
 }
 
-impl MirrorExamples {
+impl JointStageExamples {
     /// No examples yet, of `joints` values a step.
     pub fn new(joints: usize) -> Self {
-        MirrorExamples {
+        JointStageExamples {
             joints,
             ..Default::default()
         }
@@ -34,7 +34,7 @@ impl MirrorExamples {
 
     /// Features per example.
     pub fn features(&self) -> usize {
-        mirror_input_len(self.joints)
+        joint_stage_input_len(self.joints)
     }
 
     /// Adds `draws` layouts of `seq`: the glimpses, the joints `predictor`'s network reads
@@ -57,7 +57,7 @@ impl MirrorExamples {
             let reads = predictor.reads(&Observations::from_sequence(seq, &steps)?)?;
             let times: Vec<f32> = steps.iter().map(|&s| phases[s]).collect();
             let span = steps[0]..=steps[steps.len() - 1];
-            let (x, start) = mirror_inputs(&times, &reads, &phases[span.clone()]);
+            let (x, start) = joint_stage_inputs(&times, &reads, &phases[span.clone()]);
             debug_assert_eq!(x.len(), span.clone().count() * self.features());
             self.x.extend(x);
             self.start.extend(start);
@@ -69,12 +69,12 @@ impl MirrorExamples {
     }
 }
 
-/// The `d`-th layout of glimpses of a `t`-step sequence: 2 to [`MIRROR_SLOTS`] of them (at
+/// The `d`-th layout of glimpses of a `t`-step sequence: 2 to [`JOINT_STAGE_SLOTS`] of them (at
 /// most t), in turn evenly spaced with the first and last step (as a user observes a whole
 /// action), one at a random step of each of as many equal stretches, or evenly spaced over a
 /// random prefix of 10-90% (the start of an action, to forecast the rest from).
 pub fn layout(t: usize, d: usize, rng: &mut impl Rng) -> Vec<usize> {
-    let k = rng.random_range(2..=MIRROR_SLOTS).min(t);
+    let k = rng.random_range(2..=JOINT_STAGE_SLOTS).min(t);
     if k < 2 {
         return vec![0; t.min(1)];
     }
@@ -106,7 +106,7 @@ mod tests {
         for d in 0..200 {
             let t = 5 + d % 150;
             let steps = layout(t, d, &mut rng);
-            assert!((1..=MIRROR_SLOTS).contains(&steps.len()), "{steps:?}");
+            assert!((1..=JOINT_STAGE_SLOTS).contains(&steps.len()), "{steps:?}");
             assert!(steps.windows(2).all(|w| w[0] < w[1]), "{steps:?}");
             let last = *steps.last().unwrap();
             assert!(last < t);

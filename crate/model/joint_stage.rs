@@ -4,17 +4,17 @@ use burn::nn::Linear;
 use burn::tensor::activation::{gelu, softplus};
 use burn::tensor::{Device, Tensor, TensorData};
 
-use super::mirror_inputs::{mirror_input_len, mirror_inputs};
+use super::joint_stage_inputs::{joint_stage_input_len, joint_stage_inputs};
 use crate::data::Joints;
 
 /// Hidden layers of the stage's network.
-pub const MIRROR_LAYERS: usize = 3;
+pub const JOINT_STAGE_LAYERS: usize = 3;
 /// Lower bound of the stage's σ (radians, and metres of gripper travel).
-pub const MIRROR_SIGMA_FLOOR: f64 = 1e-4;
+pub const JOINT_STAGE_SIGMA_FLOOR: f64 = 1e-4;
 
-/// Configuration of a [`Mirror`] stage.
+/// Configuration of a [`JointStage`] stage.
 #[derive(Config, Debug)]
-pub struct MirrorConfig {
+pub struct JointStageConfig {
     /// Width of each hidden layer.
     #[config(default = 256)]
     pub width: usize,
@@ -23,14 +23,15 @@ pub struct MirrorConfig {
     pub joints: usize,
 }
 
-/// The mirror's second stage, in joint space: shown only frames (blend 1), the network reads
-/// the joints at each glimpse well (about 0.03 rad) but the trajectory between the glimpses
-/// it imagines lands pushes short of where the demonstration did. The stage sees the reads
-/// side by side ([`mirror_inputs`]) and corrects their linear interpolation at each target
-/// time (GELU layers, then a mean and a σ head). It learns from the network's own reads of
-/// training frames at random glimpse layouts (`train --mirror`, [`crate::train::fit_mirror`]).
+/// The joint stage, a model file's second stage, in joint space: shown only frames (blend 1),
+/// the network reads the joints at each glimpse well (about 0.03 rad) but the trajectory
+/// between the glimpses it imagines lands pushes short of where the demonstration did. The
+/// stage sees the reads side by side ([`joint_stage_inputs`]) and corrects their linear
+/// interpolation at each target time (GELU layers, then a mean and a σ head). It learns from
+/// the network's own reads of training frames at random glimpse layouts (`train
+/// --joint-stage`, [`crate::train::fit_joint_stage`]).
 #[derive(Module, Debug)]
-pub struct Mirror {
+pub struct JointStage {
     /// What every input is divided by (the largest magnitude it took in training); not
     /// trained.
     pub scale: Param<Tensor<1>>,
@@ -38,17 +39,17 @@ pub struct Mirror {
     pub layers: Vec<Linear>,
     /// The correction of the interpolated reads (radians); zero in a fresh stage.
     pub mean: Linear,
-    /// σ of the corrected joints, through softplus above [`MIRROR_SIGMA_FLOOR`]; it reads the
+    /// σ of the corrected joints, through softplus above [`JOINT_STAGE_SIGMA_FLOOR`]; it reads the
     /// hidden layers without training them, so that fitting σ cannot move the mean.
     pub sigma: Linear,
 }
 
-impl MirrorConfig {
+impl JointStageConfig {
     /// A stage whose correction is zero: it predicts the interpolated reads.
-    pub fn init(&self, device: &Device) -> Mirror {
-        let (d, features) = (self.joints, mirror_input_len(self.joints));
+    pub fn init(&self, device: &Device) -> JointStage {
+        let (d, features) = (self.joints, joint_stage_input_len(self.joints));
         let mut inputs = features;
-        let layers = (0..MIRROR_LAYERS)
+        let layers = (0..JOINT_STAGE_LAYERS)
             .map(|_| {
                 let layer = super::init::dense(inputs, self.width, device);
                 inputs = self.width;
@@ -57,7 +58,7 @@ impl MirrorConfig {
             .collect();
         let mut mean = super::init::dense(inputs, d, device);
         mean.weight = Param::from_tensor(Tensor::zeros([inputs, d], device));
-        Mirror {
+        JointStage {
             scale: Param::from_tensor(Tensor::ones([features], device)).set_require_grad(false),
             layers,
             mean,
@@ -66,7 +67,7 @@ impl MirrorConfig {
     }
 }
 
-impl Mirror {
+impl JointStage {
     /// Width of the hidden layers.
     pub fn width(&self) -> usize {
         self.mean.weight.dims()[0]
@@ -77,8 +78,8 @@ impl Mirror {
         self.mean.weight.dims()[1]
     }
 
-    /// `[M, mirror_input_len(D)]` features and `[M, D]` interpolated reads to the mean and σ
-    /// joints, `[M, D]` each, in joint units.
+    /// `[M, joint_stage_input_len(D)]` features and `[M, D]` interpolated reads to the mean
+    /// and σ joints, `[M, D]` each, in joint units.
     pub fn forward(&self, x: Tensor<2>, start: Tensor<2>) -> (Tensor<2>, Tensor<2>) {
         let x = x / self.scale.val().unsqueeze::<2>();
         let h = self
@@ -86,7 +87,8 @@ impl Mirror {
             .iter()
             .fold(x, |x, layer| gelu(layer.forward(x)));
         let mean = start + self.mean.forward(h.clone());
-        let sigma = softplus(self.sigma.forward(h.detach()), 1.0).add_scalar(MIRROR_SIGMA_FLOOR);
+        let sigma =
+            softplus(self.sigma.forward(h.detach()), 1.0).add_scalar(JOINT_STAGE_SIGMA_FLOOR);
         (mean, sigma)
     }
 
@@ -100,8 +102,8 @@ impl Mirror {
         device: &Device,
     ) -> (Joints, Joints) {
         let (m, d) = (targets.len(), reads.width());
-        let (x, start) = mirror_inputs(times, reads, targets);
-        let x = Tensor::from_data(TensorData::new(x, [m, mirror_input_len(d)]), device);
+        let (x, start) = joint_stage_inputs(times, reads, targets);
+        let x = Tensor::from_data(TensorData::new(x, [m, joint_stage_input_len(d)]), device);
         let start = Tensor::from_data(TensorData::new(start, [m, d]), device);
         let (mean, sigma) = self.forward(x, start);
         (rows(mean), rows(sigma))

@@ -1,9 +1,11 @@
-"""The mirror stage (crate/model/mirror.rs): shown only frames (blend 1), the joints the network
-reads at each glimpse, seen side by side, correct their linear interpolation at each target.
+"""The joint stage (crate/model/joint_stage.rs): shown only frames (blend 1), the joints the
+network reads at each glimpse, seen side by side, correct their linear interpolation at each
+target.
 
-`mirror_inputs` builds the features exactly as crate/model/mirror_inputs.rs does; `Mirror`
-holds the tensors `dmbn export` writes under `mirror.` (`train --mirror` fits them). Sized by
-the model's D joint values a step (7 for the original arm).
+`joint_stage_inputs` builds the features exactly as crate/model/joint_stage_inputs.rs does;
+`JointStage` holds the tensors `dmbn export` writes under `mirror.`, the stage's old name
+(`train --joint-stage` fits them). Sized by the model's D joint values a step (7 for the
+original arm).
 """
 import math
 
@@ -46,7 +48,7 @@ def interpolate(times, reads, targets):
     return torch.where((targets >= times[-1]).unsqueeze(1), reads[-1], inner)
 
 
-def mirror_inputs(times, reads, targets):
+def joint_stage_inputs(times, reads, targets):
     """The features [M, input_width(D)] and the interpolated reads [M, D] at `targets` (phases)
     for glimpses at `times` [K] (any order) read as `reads` [K, D]."""
     order = torch.sort(times, stable=True).indices
@@ -66,7 +68,7 @@ def mirror_inputs(times, reads, targets):
     return torch.stack(rows), start
 
 
-class Mirror(nn.Module):
+class JointStage(nn.Module):
     """The stage of hidden `width` for D = `joints` values a step."""
 
     def __init__(self, width, joints=JOINTS):
@@ -85,4 +87,4 @@ class Mirror(nn.Module):
 
     def predict(self, times, reads, targets):
         """Mean and σ [M, D] (joint units: the original's radians and gripper) at `targets`."""
-        return self(*mirror_inputs(times, reads, targets))
+        return self(*joint_stage_inputs(times, reads, targets))
