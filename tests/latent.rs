@@ -186,11 +186,9 @@ fn train_latent_adds_a_path_and_logs_its_kl() {
         "{}",
         String::from_utf8_lossy(&ok.stderr)
     );
-    let json = std::fs::read_to_string(out_dir.join("samples.json")).unwrap();
-    assert!(
-        json.contains("\"auto\""),
-        "the sampling's method is recorded"
-    );
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out_dir.join("samples.json")).unwrap()).unwrap();
+    assert_eq!(json["sampling"]["method"], "latent", "{}", json["sampling"]);
     // Refused: a path on a network without attention, another L than the file's, --method
     // latent on a model without one.
     let mut pte: Vec<&str> = vec!["--data", d, "--out", r, "--latent", "4"];
