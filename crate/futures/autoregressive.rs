@@ -3,7 +3,7 @@ use rand_pcg::Pcg64;
 
 use super::{FutureScores, Method, Order, Sampling};
 use crate::data::{Joints, Sequence};
-use crate::model::{EncodedContexts, ModelError};
+use crate::model::{values, EncodedContexts, ModelError};
 use crate::predict::{Encoding, Observations, Predictor};
 
 /// One sampled future: what the decoders condition on once its steps are drawn, and the draws.
@@ -125,13 +125,7 @@ fn draw_latent_futures(
             "the model has no latent path",
         ));
     };
-    let read = |t: burn::tensor::Tensor<2>| -> Vec<f32> {
-        t.into_data()
-            .convert::<f32>()
-            .try_to_vec()
-            .unwrap_or_default()
-    };
-    let (mean, sigma) = (read(prior.mean), read(prior.sigma));
+    let (mean, sigma) = (values(prior.mean), values(prior.sigma));
     (0..sampling.samples)
         .map(|s| {
             let mut rng = future_rng(sampling, s);

@@ -149,13 +149,7 @@ impl ModelConfig {
 
         if let Some(latent) = self.latent {
             if self.kind != ModelKind::Attn {
-                return Err(ModelError::config(
-                    "latent",
-                    format!(
-                        "is set for a {} model: only the attentive model has a latent path",
-                        self.kind
-                    ),
-                ));
+                return Err(latent_refused(self.kind));
             }
             if !(1..=MAX_LATENT).contains(&latent) {
                 return Err(ModelError::config(
@@ -300,6 +294,14 @@ fn image_size_error(image_size: usize) -> ModelError {
     ModelError::config(
         "image_size",
         format!("is {image_size}: expected one of {IMAGE_SIZES:?}"),
+    )
+}
+
+/// The error for a latent path asked of a network without attention.
+pub(super) fn latent_refused(kind: ModelKind) -> ModelError {
+    ModelError::config(
+        "latent",
+        format!("is set for a {kind} model: only the attentive model has a latent path"),
     )
 }
 

@@ -106,13 +106,7 @@ impl Model {
                     config,
                 })
             }
-            _ => Err(ModelError::config(
-                "latent",
-                format!(
-                    "is set for a {} model: only the attentive model has a latent path",
-                    self.kind()
-                ),
-            )),
+            _ => Err(super::config::latent_refused(self.kind())),
         }
     }
 

@@ -3,7 +3,10 @@ use burn::optim::{GradientsAccumulator, GradientsParams};
 use burn::tensor::{Device, Distribution, Tensor};
 
 use crate::augment::{Batch, JointTargets};
-use crate::model::{joint_nll, joint_target_tensors, kl_divergence, tensors, LossValues, Model};
+use crate::model::{
+    joint_nll, joint_target_tensors, kl_divergence, tensors, BatchTensors, LossValues, Model,
+    Representation,
+};
 
 use super::{TrainConfig, TrainError};
 
@@ -78,35 +81,11 @@ fn shard(
     shards: usize,
 ) -> Result<(LossValues, GradientsParams), TrainError> {
     let batch = tensors(batch, device)?;
-    let mut representation = model.encode(&batch)?;
-    let mut kl = None;
-    if model.latent_size().is_some() {
-        // z from its posterior given the targets' joints (reparameterised), the KL to its prior.
-        let (Some(times), Some(joints)) = (
-            Some(batch.target_times.clone()),
-            batch.target_joints.clone(),
-        ) else {
-            return Err(TrainError::config(
-                "latent",
-                "the batch has no target joints",
-            ));
-        };
-        let (times, joints) = if joint_targets.targets > 0 {
-            let (t, j) = joint_target_tensors(joint_targets, model.joint_count(), device)?;
-            (
-                Tensor::cat(vec![times, t], 1),
-                Tensor::cat(vec![joints, j], 1),
-            )
-        } else {
-            (times, joints)
-        };
-        let prior = model.prior(&representation);
-        if let (Some(q), Some(p)) = (model.posterior(&representation, times, joints), prior) {
-            let noise = Tensor::random(q.mean.dims(), Distribution::Normal(0.0, 1.0), device);
-            representation = model.with_latent(&representation, q.draw(noise))?;
-            kl = Some(kl_divergence(&q, &p));
-        }
-    }
+    let joint_only = (joint_targets.targets > 0)
+        .then(|| joint_target_tensors(joint_targets, model.joint_count(), device))
+        .transpose()?;
+    let representation = model.encode(&batch)?;
+    let (representation, kl) = posterior_draw(model, representation, &batch, &joint_only, device)?;
     let prediction = model.decode(&representation, batch.target_times.clone())?;
     let mut loss = model.loss(&prediction, &batch, config.beta_nll)?;
     if let (Some(drawn), Some(frames)) = (&prediction.image_drawn, &batch.target_images) {
@@ -115,9 +94,7 @@ fn shard(
             loss.total = loss.total + mse.mul_scalar(config.drawn_frame_weight);
         }
     }
-    if joint_targets.targets > 0 {
-        let d = model.joint_count();
-        let (times, joints) = joint_target_tensors(joint_targets, d, device)?;
+    if let Some((times, joints)) = joint_only {
         let (mean, sigma) = model.decode_joints(&representation, times)?;
         let nll = joint_nll(mean, sigma, joints, config.beta_nll);
         loss.total = loss.total + nll.mul_scalar(config.model.joint_weight);
@@ -134,6 +111,39 @@ fn shard(
     // Exact for one shard (x / 1 = x): a single device's step is the undivided one.
     let total = loss.total.div_scalar(shards as f64);
     Ok((values, GradientsParams::from_grads(total.backward(), model)))
+}
+
+/// For a model with a latent path: the representation with z drawn from its posterior given
+/// the targets' joints, those with frames and the joint-only ones (reparameterised), and
+/// KL(posterior ‖ prior). Other models: the representation as it is, no KL.
+fn posterior_draw(
+    model: &Model,
+    representation: Representation,
+    batch: &BatchTensors,
+    joint_only: &Option<(Tensor<2>, Tensor<3>)>,
+    device: &Device,
+) -> Result<(Representation, Option<Tensor<1>>), TrainError> {
+    if model.latent_size().is_none() {
+        return Ok((representation, None));
+    }
+    let joints = (batch.target_joints.clone())
+        .ok_or_else(|| TrainError::config("latent", "the batch has no target joints"))?;
+    let (mut times, mut joints) = (vec![batch.target_times.clone()], vec![joints]);
+    if let Some((t, j)) = joint_only {
+        times.push(t.clone());
+        joints.push(j.clone());
+    }
+    let posterior = model.posterior(
+        &representation,
+        Tensor::cat(times, 1),
+        Tensor::cat(joints, 1),
+    );
+    let (Some(q), Some(p)) = (posterior, model.prior(&representation)) else {
+        return Ok((representation, None));
+    };
+    let noise = Tensor::random(q.mean.dims(), Distribution::Normal(0.0, 1.0), device);
+    let drawn = model.with_latent(&representation, q.draw(noise))?;
+    Ok((drawn, Some(kl_divergence(&q, &p))))
 }
 
 #[cfg(test)]
