@@ -4,14 +4,16 @@
 #
 #   bash docs/futures.sh design [OUT]   # the design set (seeds 1000000-): the sampling settings compared
 #   bash docs/futures.sh final  [OUT]   # the three fresh sets (seeds 1100000-, 1200000-, 1300000-): the reported table
+#                                       # (futures with the file's joint correlation, and with independent joints)
 #   bash docs/futures.sh latent [OUT]   # the latent path against autoregressive sampling, on the design set
+#   bash docs/futures.sh script         # what 8 futures drawn from the simulator's script itself would score
 #
 # Each set is 100 simulated demonstrations per action (`dmbn simulate --sequences 100`). OUT
 # (default out/futures) receives the data, every run's JSON and printed tables. About 10 min
 # per set on a 2-core machine.
 set -euo pipefail
 
-what=${1:?usage: bash docs/futures.sh design|final [OUT]}
+what=${1:?usage: bash docs/futures.sh design|final|latent|script [OUT]}
 root=$(cd "$(dirname "$0")/.." && pwd)
 out=${2:-$root/out/futures}
 export CARGO_TARGET_DIR=${CARGO_TARGET_DIR:-$HOME/.cache/dmbn/target}
@@ -26,41 +28,58 @@ data() {
   echo "$out/ur5-$1"
 }
 
-# How far apart a run's futures push: the standard deviation of the object's travel over a
-# demonstration's 8 futures, mean over the pushes (cm).
+# Where a run's futures take the object against the demonstrations (the ceiling's replays):
+# the median push travel and grasp carry (cm from where the object rested), and how far apart
+# a demonstration's futures push (the standard deviation of their travel, mean over pushes).
 spread() {
   [ -f "$1" ] || return 0
   python3 - "$1" "$2" <<'PY'
 import json, statistics, sys
 from collections import defaultdict
+run = json.load(open(sys.argv[1]))[0]
+ceiling = [p for p in run["performances"] if p["trajectory"].startswith("ceiling")]
+futures = run["future_performances"]
+median = lambda rows, action: statistics.median(r["travel_cm"] for r in rows if r["action"] == action)
 travel = defaultdict(list)
-for f in json.load(open(sys.argv[1]))[0]["future_performances"]:
+for f in futures:
     if f["action"] == "move":
         travel[f["id"]].append(f["travel_cm"])
-print(f"{sys.argv[2]}: push travel spread {statistics.mean(map(statistics.pstdev, travel.values())):.2f} cm")
+print(f"{sys.argv[2]}: push travel spread {statistics.mean(map(statistics.pstdev, travel.values())):.2f} cm; "
+      f"median push travel {median(futures, 'move'):.1f} cm (demonstrations {median(ceiling, 'move'):.1f}), "
+      f"grasp carry {median(futures, 'grasp'):.1f} cm (demonstrations {median(ceiling, 'grasp'):.1f})")
 PY
 }
 
 case $what in
   design)
     set=$(data 1000000)
-    # grid order τ: the settings compared (the defaults: 2 left-to-right 0.7).
-    for cfg in "1 left-to-right 1" "2 left-to-right 1" "3 left-to-right 1" "4 left-to-right 1" \
-      "8 left-to-right 1" "4 random 1" "8 random 1" "2 left-to-right 0.85" "2 left-to-right 0.7" \
-      "3 left-to-right 0.7" "2 left-to-right 0.5"; do
-      read -r grid order tau <<<"$cfg"
-      name="$out/design-g$grid-$order-t$tau"
+    # grid order τ joints: the settings compared (the defaults: 2 left-to-right 0.7, joints
+    # correlated as attn-sim.dmbn's joint correlation says).
+    for cfg in "1 left-to-right 1 independent" "2 left-to-right 1 independent" \
+      "3 left-to-right 1 independent" "4 left-to-right 1 independent" "8 left-to-right 1 independent" \
+      "4 random 1 independent" "8 random 1 independent" "2 left-to-right 0.85 independent" \
+      "2 left-to-right 0.7 independent" "3 left-to-right 0.7 independent" "2 left-to-right 0.5 independent" \
+      "2 left-to-right 0.7 correlated" "2 left-to-right 0.85 correlated" "2 left-to-right 1 correlated" \
+      "3 left-to-right 0.85 correlated" "3 left-to-right 1 correlated"; do
+      read -r grid order tau joints <<<"$cfg"
+      name="$out/design-g$grid-$order-t$tau-$joints"
       "$dmbn" imitate --model "$model" --data "$set" --task finish --samples 8 --grid "$grid" \
-        --order "$order" --temperature "$tau" --json "$name.json" >"$name.txt"
-      grep -A5 "sampled futures each" "$name.txt" | grep '^| [gm]' | sed "s/^/g$grid $order τ$tau /"
+        --order "$order" --temperature "$tau" --joints "$joints" --json "$name.json" >"$name.txt"
+      grep -A5 "sampled futures each" "$name.txt" | grep '^| [gm]' | sed "s/^/g$grid $order τ$tau $joints /"
     done
     ;;
   final)
     for seed in 1100000 1200000 1300000; do
       set=$(data $seed)
       "$dmbn" imitate --model "$model" --data "$set" --task finish --samples 8 --json "$out/finish-$seed.json" | tee "$out/finish-$seed.txt"
+      "$dmbn" imitate --model "$model" --data "$set" --task finish --samples 8 --joints independent \
+        --json "$out/finish-independent-$seed.json" | tee "$out/finish-independent-$seed.txt"
       "$dmbn" imitate --model "$model" --data "$set" --task frames --json "$out/frames-$seed.json" | tee "$out/frames-$seed.txt"
       "$dmbn" score --model "$model" --data "$set" --scenario extrap --samples 8 --json "$out/score-$seed.json" | tee "$out/score-$seed.txt"
+    done
+    for seed in 1100000 1200000 1300000; do
+      spread "$out/finish-$seed.json" "set $seed, correlated"
+      spread "$out/finish-independent-$seed.json" "set $seed, independent"
     done
     ;;
   latent)
@@ -88,17 +107,53 @@ case $what in
     train free8 "$out/free3/model.dmbn" "${short[@]}" --latent-free-nats 8
     # Longer, at a higher rate, with twice the prefixes (the ambiguous case).
     train long8 "$out/free8/model.dmbn" --steps 6000 --lr 5e-4 --prefix-contexts 0.6 --latent-free-nats 8
-    for run in kl003-latent-1 free3-latent-1 free3-latent-2.5 free3-ar-0.7 free8-latent-1 free8-latent-2.5 long8-latent-1 long8-latent-2.5; do
+    # A path trained with the network from the start: 20,000 steps, about 1.5 h on two cores.
+    if [ ! -f "$out/scratch/model.dmbn" ]; then
+      if [ -f "$out/scratch/checkpoint/state.json" ]; then
+        "$CARGO_TARGET_DIR/release/train" --resume --data "$sim" --out "$out/scratch"
+      else
+        "$CARGO_TARGET_DIR/release/train" --data "$sim" --out "$out/scratch" --model attn --joint-weight 1 \
+          --contexts-in-targets --targets-per-sequence 8 --joint-targets 32 --single-modality 0.6 \
+          --prefix-contexts 0.5 --val-every 500 --checkpoint-every 250 --val-fraction 0.1 --half \
+          --schedule cosine --lr 1e-3 --beta-nll 1 --encoder-filters 16,32,64,64,128 \
+          --decoder-filters 128,64,32,32,16,16,8 --coarse-tail --frame-joints --steps 20000 --seed 31 \
+          --latent 16 --latent-kl 0.003 --latent-free-nats 8
+      fi
+    fi
+    for run in kl003-latent-1 free3-latent-1 free3-latent-2.5 free3-ar-0.7 free8-latent-1 free8-latent-2.5 long8-latent-1 long8-latent-2.5 scratch-latent-1 scratch-latent-2; do
       IFS=- read -r name method tau <<<"$run"
       "$dmbn" imitate --model "$out/$name/model.dmbn" --data "$set" --task finish --samples 8 \
         --method "$method" --temperature "$tau" --json "$out/latent-$run.json" >"$out/latent-$run.txt"
       grep -A5 "sampled futures each" "$out/latent-$run.txt" | grep '^| [gm]' | sed "s/^/$run /"
       spread "$out/latent-$run.json" "$run"
     done
-    spread "$out/design-g2-left-to-right-t0.7.json" "attn-sim-ar-0.7 (bash docs/futures.sh design)"
+    for joints in independent correlated; do
+      spread "$out/design-g2-left-to-right-t0.7-$joints.json" "attn-sim-ar-0.7-$joints (bash docs/futures.sh design)"
+    done
+    ;;
+  script)
+    # The script (crate/sim/script.rs) draws a grasp's carry spot uniformly within ±6 cm of
+    # the object on each axis and a push's length uniformly in 12-22 cm, after the first 30%.
+    # Futures drawn from the script itself, judged as `imitate` judges (a grasp within 5 cm of
+    # the demonstration's spot, a push within 3 cm along its direction):
+    python3 - <<'PY'
+import math, random
+r, n, s = random.Random(0), 100_000, 8
+spot = lambda: (r.uniform(-6, 6), r.uniform(-6, 6))
+valid = covered = pushes = 0
+for _ in range(n):
+    demo = spot()
+    hits = [math.dist(demo, spot()) < 5 for _ in range(s)]
+    valid, covered = valid + sum(hits), covered + any(hits)
+    length = r.uniform(12, 22)
+    pushes += any(abs(length - r.uniform(12, 22)) < 3 for _ in range(s))
+print(f"the script's own futures, {s} a demonstration: grasps valid (carried within 5 cm) "
+      f"{valid / (s * n):.0%}, covered {covered / n:.0%}; pushes covered {pushes / n:.0%}; "
+      f"a push's length spreads {10 / math.sqrt(12):.1f} cm (standard deviation)")
+PY
     ;;
   *)
-    echo "error: the first argument is design, final or latent, not '$what'" >&2
+    echo "error: the first argument is design, final, latent or script, not '$what'" >&2
     exit 2
     ;;
 esac

@@ -136,15 +136,21 @@ fn the_stage_survives_the_file_and_bad_files_are_refused() {
     let plain = shipped_with(None);
     let (model, header) = model::load_with_header(&plain, &Device::flex(), None, None).unwrap();
     let promised = header.config.clone().with_mirror(Some(256));
-    let lying = replace_config(&plain, &serde_json::to_value(&promised).unwrap());
+    let lying =
+        support::with_header_field(&plain, "config", serde_json::to_value(&promised).unwrap());
     let err = Predictor::from_bytes(&lying).unwrap_err().to_string();
     assert!(err.contains("mirror"), "{err}");
-    let unnamed = replace_config(&bytes, &serde_json::to_value(model.config()).unwrap());
+    let unnamed = support::with_header_field(
+        &bytes,
+        "config",
+        serde_json::to_value(model.config()).unwrap(),
+    );
     let err = Predictor::from_bytes(&unnamed).unwrap_err().to_string();
     assert!(err.contains("mirror"), "{err}");
-    let zero = replace_config(
+    let zero = support::with_header_field(
         &bytes,
-        &serde_json::to_value(header.config.with_mirror(Some(0))).unwrap(),
+        "config",
+        serde_json::to_value(header.config.with_mirror(Some(0))).unwrap(),
     );
     let err = Predictor::from_bytes(&zero).unwrap_err();
     assert!(
@@ -157,19 +163,6 @@ fn the_stage_survives_the_file_and_bad_files_are_refused() {
         ),
         "{err}"
     );
-}
-
-/// `bytes` with the header's config replaced by `config` (the weights and checksum kept).
-fn replace_config(bytes: &[u8], config: &serde_json::Value) -> Vec<u8> {
-    let len = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
-    let mut header: serde_json::Value = serde_json::from_slice(&bytes[16..16 + len]).unwrap();
-    header["config"] = config.clone();
-    let header = serde_json::to_vec(&header).unwrap();
-    let mut out = bytes[..12].to_vec();
-    out.extend_from_slice(&(header.len() as u32).to_le_bytes());
-    out.extend_from_slice(&header);
-    out.extend_from_slice(&bytes[16 + len..]);
-    out
 }
 
 /// The mean squared error of the reads' interpolation over `examples`.

@@ -1,7 +1,7 @@
 use rand::{RngExt, SeedableRng};
 use rand_pcg::Pcg64;
 
-use super::{FutureScores, Method, Order, Sampling};
+use super::{FutureScores, JointDraws, Method, Order, Sampling};
 use crate::data::{Joints, Sequence};
 use crate::model::{values, EncodedContexts, ModelError};
 use crate::predict::{Encoding, Observations, Predictor};
@@ -62,7 +62,16 @@ pub fn draw_futures_from(
         }
         _ => {}
     }
-    let image_size = predictor.model().image_size();
+    let correlation = match (sampling.joints, predictor.joint_correlation()) {
+        (JointDraws::Correlated, None) => {
+            return Err(ModelError::observation(
+                "joints",
+                "is correlated, but this model file holds no joint correlation: expected auto or independent (fit one with dmbn calibrate)",
+            ))
+        }
+        (JointDraws::Independent, _) => None,
+        (_, correlation) => correlation,
+    };
     let grid = grid(target_times, sampling.grid);
     (0..sampling.samples)
         .map(|s| {
@@ -73,31 +82,82 @@ pub fn draw_futures_from(
                     order.swap(i, rng.random_range(0..=i));
                 }
             }
-            let mut contexts = observed.clone();
-            let mut drawn = Vec::with_capacity(order.len());
-            for t in order {
-                let here = predictor.decode(&predictor.represent(&contexts, blend)?, &[t])?;
-                let joints: Vec<f32> = here
-                    .joint_mean_at(0)
-                    .iter()
-                    .zip(here.joint_sigma_at(0))
-                    .map(|(m, s)| m + sampling.temperature * s * standard_normal(&mut rng))
-                    .collect();
-                let step = Observations {
-                    image_size,
-                    frames: here.mean_frame(0),
-                    joints: joints.clone(),
-                    times: vec![t],
-                };
-                contexts = contexts.cat(&predictor.encode_contexts(&step)?)?;
-                drawn.push((t, joints));
-            }
+            let (contexts, drawn) =
+                condition_on_steps(predictor, observed, &order, blend, |_, mean, sigma| {
+                    let eps: Vec<f32> = mean.iter().map(|_| standard_normal(&mut rng)).collect();
+                    let eps = match correlation {
+                        Some(r) => r.correlate(&eps),
+                        None => eps,
+                    };
+                    let draw = mean.iter().zip(sigma).zip(eps);
+                    (draw.map(|((m, s), e)| m + sampling.temperature * s * e)).collect()
+                })?;
             Ok(Future {
                 encoding: predictor.represent(&contexts, blend)?,
                 drawn,
             })
         })
         .collect()
+}
+
+/// The observations plus `steps` taken one after another: at each, `joints_at(k, μ, σ)` gives
+/// the joints from the Gaussian predicted there given the contexts before it (a draw, or the
+/// truth when fitting), added to the contexts with the mean frame predicted there. The
+/// contexts and the steps taken.
+#[allow(clippy::type_complexity)]
+fn condition_on_steps(
+    predictor: &Predictor,
+    observed: &EncodedContexts,
+    steps: &[f32],
+    blend: f32,
+    mut joints_at: impl FnMut(usize, &[f32], &[f32]) -> Vec<f32>,
+) -> Result<(EncodedContexts, Vec<(f32, Vec<f32>)>), ModelError> {
+    let image_size = predictor.model().image_size();
+    let mut contexts = observed.clone();
+    let mut taken = Vec::with_capacity(steps.len());
+    for (k, &t) in steps.iter().enumerate() {
+        let here = predictor.decode(&predictor.represent(&contexts, blend)?, &[t])?;
+        let joints = joints_at(k, here.joint_mean_at(0), here.joint_sigma_at(0));
+        let step = Observations {
+            image_size,
+            frames: here.mean_frame(0),
+            joints: joints.clone(),
+            times: vec![t],
+        };
+        contexts = contexts.cat(&predictor.encode_contexts(&step)?)?;
+        taken.push((t, joints));
+    }
+    Ok((contexts, taken))
+}
+
+/// The standardised errors, (truth − μ) / σ, of `seq`'s joints at the grid of its `imagined`
+/// steps (increasing) that autoregressive sampling with `grid` steps, left to right, would
+/// draw from its `observed` steps, each step conditioned on the truth at the ones before it
+/// (the conditionals a draw takes): what [`crate::model::JointCorrelation::fit`] fits on
+/// (`dmbn calibrate`). One row per grid step.
+pub fn drawn_step_errors(
+    predictor: &Predictor,
+    seq: &Sequence,
+    observed: &[usize],
+    imagined: &[usize],
+    blend: f32,
+    grid_size: usize,
+) -> Result<Vec<Vec<f32>>, ModelError> {
+    let observed = predictor.encode_contexts(&Observations::from_sequence(seq, observed)?)?;
+    let times = seq.times();
+    let at: Vec<f32> = imagined.iter().map(|&k| times[k]).collect();
+    let steps = grid(&at, grid_size);
+    let truth: Vec<&[f32]> = (imagined.iter())
+        .filter(|&&k| steps.contains(&times[k]))
+        .map(|&k| &seq.joints[k])
+        .collect();
+    let mut errors = Vec::with_capacity(steps.len());
+    condition_on_steps(predictor, &observed, &steps, blend, |k, mean, sigma| {
+        let error = (truth[k].iter().zip(mean).zip(sigma)).map(|((y, m), s)| (y - m) / s);
+        errors.push(error.collect());
+        truth[k].to_vec()
+    })?;
+    Ok(errors)
 }
 
 /// Future `s`'s generator: the same whatever S.

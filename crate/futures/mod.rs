@@ -15,8 +15,8 @@ mod energy_score;
 mod sampling;
 
 pub use autoregressive::{
-    draw_futures, draw_futures_from, draw_unobserved, frames_at, sample_trajectories,
-    sample_unobserved, score_futures, trajectories, Future,
+    draw_futures, draw_futures_from, draw_unobserved, drawn_step_errors, frames_at,
+    sample_trajectories, sample_unobserved, score_futures, trajectories, Future,
 };
 pub use energy_score::{EnergyScore, FutureScoreRow, FutureScoreSums, FutureScores};
-pub use sampling::{Method, Order, Sampling};
+pub use sampling::{JointDraws, Method, Order, Sampling};

@@ -89,6 +89,51 @@ impl FromStr for Method {
     }
 }
 
+/// How a drawn step's joint values go together (autoregressive futures).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum JointDraws {
+    /// Correlated where the model file holds a [`crate::model::JointCorrelation`], otherwise
+    /// independent (the default).
+    Auto,
+    /// As the file's correlation says (fails without one).
+    Correlated,
+    /// Each joint on its own, from its predicted Gaussian.
+    Independent,
+}
+
+impl JointDraws {
+    /// `auto`, `correlated` or `independent`.
+    pub fn name(self) -> &'static str {
+        match self {
+            JointDraws::Auto => "auto",
+            JointDraws::Correlated => "correlated",
+            JointDraws::Independent => "independent",
+        }
+    }
+}
+
+impl fmt::Display for JointDraws {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for JointDraws {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s {
+            "auto" => Ok(JointDraws::Auto),
+            "correlated" => Ok(JointDraws::Correlated),
+            "independent" => Ok(JointDraws::Independent),
+            _ => Err(format!(
+                "{s:?} is not a way to draw joints: expected auto, correlated or independent"
+            )),
+        }
+    }
+}
+
 /// How futures are sampled ([`super::draw_futures`]).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Sampling {
@@ -101,6 +146,8 @@ pub struct Sampling {
     pub grid: usize,
     /// The order the grid is drawn in.
     pub order: Order,
+    /// A drawn step's joints: correlated as the model file says, or each on its own.
+    pub joints: JointDraws,
     /// τ: each step (or the latent z) is drawn from N(μ, (τσ)²); below 1 the futures keep
     /// nearer the mean.
     pub temperature: f32,
@@ -120,6 +167,7 @@ impl Default for Sampling {
             method: Method::Auto,
             grid: 2,
             order: Order::LeftToRight,
+            joints: JointDraws::Auto,
             temperature: 0.7,
             seed: 0,
         }
@@ -143,7 +191,12 @@ impl Sampling {
     /// How the futures are drawn, in words (the reports' headings): "latent path, τ 1, seed
     /// 0", "2 steps drawn, left-to-right, τ 0.7, seed 0", or for `auto` both.
     pub fn describe(&self) -> String {
-        let ar = format!("{} steps drawn, {}", self.grid, self.order);
+        let joints = match self.joints {
+            JointDraws::Auto => "joints correlated where the file says",
+            JointDraws::Correlated => "joints correlated",
+            JointDraws::Independent => "joints independent",
+        };
+        let ar = format!("{} steps drawn, {}, {joints}", self.grid, self.order);
         let how = match self.method {
             Method::Latent => "latent path".to_string(),
             Method::Ar => ar,
@@ -152,15 +205,24 @@ impl Sampling {
         format!("{how}, τ {}, seed {}", self.temperature, self.seed)
     }
 
-    /// The sampling as drawn for a model with (`true`) or without a latent path: `auto`
-    /// resolved.
-    pub fn resolved(&self, has_latent: bool) -> Sampling {
+    /// The sampling as drawn for a model with or without a latent path and a joint
+    /// correlation: each `auto` resolved.
+    pub fn resolved(&self, has_latent: bool, has_correlation: bool) -> Sampling {
         let method = match self.method {
             Method::Auto if has_latent => Method::Latent,
             Method::Auto => Method::Ar,
             other => other,
         };
-        Sampling { method, ..*self }
+        let joints = match self.joints {
+            JointDraws::Auto if has_correlation => JointDraws::Correlated,
+            JointDraws::Auto => JointDraws::Independent,
+            other => other,
+        };
+        Sampling {
+            method,
+            joints,
+            ..*self
+        }
     }
 
     /// Fails unless 1 ≤ S ≤ [`Sampling::MAX_SAMPLES`], 0 ≤ τ ≤ 4 and 1 ≤ G ≤
@@ -206,6 +268,14 @@ mod tests {
     #[test]
     fn orders_parse_and_bad_settings_are_named() {
         assert_eq!("random".parse::<Order>(), Ok(Order::Random));
+        assert_eq!("independent".parse(), Ok(JointDraws::Independent));
+        assert!("together"
+            .parse::<JointDraws>()
+            .unwrap_err()
+            .contains("auto, correlated or independent"));
+        let auto = Sampling::default();
+        assert_eq!(auto.resolved(false, true).joints, JointDraws::Correlated);
+        assert_eq!(auto.resolved(false, false).joints, JointDraws::Independent);
         assert!("backwards"
             .parse::<Order>()
             .unwrap_err()

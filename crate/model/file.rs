@@ -21,7 +21,9 @@ use burn::tensor::{Bytes, Device};
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
-use super::{JointSigmaScale, Model, ModelConfig, ModelError, ModelKind, Normalization};
+use super::{
+    JointCorrelation, JointSigmaScale, Model, ModelConfig, ModelError, ModelKind, Normalization,
+};
 
 /// The first 8 bytes of every model file.
 pub const MAGIC: &[u8; 8] = b"DMBNMODL";
@@ -73,6 +75,11 @@ pub struct ModelHeader {
     /// [`ModelHeader::joint_sigma_scale`].
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub forecast_joint_sigma_scale: Option<f32>,
+    /// How a step's joint errors go together ([`JointCorrelation`]: R, row-major D × D),
+    /// fitted with the σ scales; sampled futures draw each step's joints with it. Absent:
+    /// each joint drawn on its own.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub joint_correlation: Option<Vec<f32>>,
     /// The weight section.
     pub weights: WeightsInfo,
 }
@@ -84,6 +91,14 @@ impl ModelHeader {
             between: self.joint_sigma_scale.unwrap_or(1.0),
             forecast: self.forecast_joint_sigma_scale,
         }
+    }
+
+    /// The file's [`JointCorrelation`], if it holds one (checked when the file is read).
+    pub fn joint_correlation(&self) -> Result<Option<JointCorrelation>, ModelError> {
+        let joints = self.config.joint_count();
+        (self.joint_correlation.clone())
+            .map(|values| JointCorrelation::new("joint_correlation", values, joints))
+            .transpose()
     }
 }
 
@@ -111,6 +126,7 @@ pub fn save_bytes(
         normalization: normalization.clone(),
         joint_sigma_scale: None,
         forecast_joint_sigma_scale: None,
+        joint_correlation: None,
         weights: WeightsInfo {
             format: "burnpack".into(),
             dtype: if half {
@@ -135,6 +151,18 @@ pub fn with_joint_sigma_scale(bytes: &[u8], scale: JointSigmaScale) -> Result<Ve
     let (mut header, weights) = split(bytes)?;
     header.joint_sigma_scale = Some(scale.between);
     header.forecast_joint_sigma_scale = scale.forecast;
+    assemble(&header, weights)
+}
+
+/// The model file `bytes` with its [`JointCorrelation`] set to `correlation` (removed for
+/// `None`); the weights are kept as they are.
+pub fn with_joint_correlation(
+    bytes: &[u8],
+    correlation: Option<&JointCorrelation>,
+) -> Result<Vec<u8>, ModelError> {
+    let (mut header, weights) = split(bytes)?;
+    header.joint_correlation = correlation.map(|r| r.values().to_vec());
+    header.joint_correlation()?;
     assemble(&header, weights)
 }
 
@@ -268,6 +296,7 @@ fn split(bytes: &[u8]) -> Result<(ModelHeader, &[u8]), ModelError> {
         "forecast_joint_sigma_scale",
         header.forecast_joint_sigma_scale,
     )?;
+    header.joint_correlation()?;
     if header.weights.format != "burnpack" {
         return Err(ModelError::Header(format!(
             "weights.format is {:?}: expected \"burnpack\"",

@@ -27,6 +27,7 @@ mod image_decoder;
 mod image_encoder;
 mod init;
 mod interpolation;
+mod joint_correlation;
 mod joint_decoder;
 mod joint_encoder;
 mod joint_sigma_scale;
@@ -61,13 +62,14 @@ pub use encoded_contexts::EncodedContexts;
 pub use error::ModelError;
 pub use file::{
     load_bytes, load_bytes_expecting, load_with_header, read_header, save_bytes,
-    with_joint_sigma_scale, ModelHeader, WeightDType,
+    with_joint_correlation, with_joint_sigma_scale, ModelHeader, WeightDType,
 };
 pub use gaussian::bounded_sigma;
 pub use image_decoder::{upsample2, DecodedFrames, ImageDecoder, ImageDecoderConfig};
 pub use image_encoder::{ImageEncoder, ImageEncoderConfig};
 pub use init::{glorot, Initialization};
 pub use interpolation::{gaps, interpolation_tensors, linear_weights};
+pub use joint_correlation::JointCorrelation;
 pub use joint_decoder::{JointDecoder, JointDecoderConfig};
 pub use joint_encoder::{JointEncoder, JointEncoderConfig};
 pub use joint_sigma_scale::JointSigmaScale;

@@ -19,7 +19,8 @@ use safetensors::{Dtype, SafeTensors};
 use serde::{Deserialize, Serialize};
 
 use super::{
-    load_with_header, save_bytes, JointSigmaScale, Model, ModelConfig, ModelError, Normalization,
+    load_with_header, save_bytes, JointCorrelation, JointSigmaScale, Model, ModelConfig,
+    ModelError, Normalization,
 };
 
 /// The metadata key holding [`SafetensorsHeader`] as JSON.
@@ -41,6 +42,9 @@ pub struct SafetensorsHeader {
     /// The model file's factor on the joint σ outside the observed times' span, if any.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub forecast_joint_sigma_scale: Option<f32>,
+    /// The model file's joint correlation for sampled futures, if any (row-major D × D).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub joint_correlation: Option<Vec<f32>>,
 }
 
 /// The model file in `model_file` as safetensors bytes, f32 (or f16 when `half`).
@@ -52,6 +56,7 @@ pub fn export_safetensors(model_file: &[u8], half: bool) -> Result<Vec<u8>, Mode
         normalization: file.normalization,
         joint_sigma_scale: file.joint_sigma_scale,
         forecast_joint_sigma_scale: file.forecast_joint_sigma_scale,
+        joint_correlation: file.joint_correlation,
     };
     let header = serde_json::to_string(&header)
         .map_err(|e| ModelError::Header(format!("cannot write the metadata: {e}")))?;
@@ -111,16 +116,22 @@ pub fn import_safetensors(bytes: &[u8], half: bool) -> Result<Vec<u8>, ModelErro
             "tensor `{path}` is missing"
         )));
     }
-    let bytes = save_bytes(&model, &header.normalization, half)?;
-    match (header.joint_sigma_scale, header.forecast_joint_sigma_scale) {
-        (None, None) => Ok(bytes),
-        (between, forecast) => super::with_joint_sigma_scale(
-            &bytes,
-            JointSigmaScale {
-                between: between.unwrap_or(1.0),
-                forecast,
-            },
-        ),
+    let mut bytes = save_bytes(&model, &header.normalization, half)?;
+    let (between, forecast) = (header.joint_sigma_scale, header.forecast_joint_sigma_scale);
+    if between.is_some() || forecast.is_some() {
+        let scale = JointSigmaScale {
+            between: between.unwrap_or(1.0),
+            forecast,
+        };
+        bytes = super::with_joint_sigma_scale(&bytes, scale)?;
+    }
+    match header.joint_correlation {
+        Some(values) => {
+            let joints = header.config.joint_count();
+            let correlation = JointCorrelation::new("joint_correlation", values, joints)?;
+            super::with_joint_correlation(&bytes, Some(&correlation))
+        }
+        None => Ok(bytes),
     }
 }
 

@@ -4,8 +4,8 @@ use super::{Encoding, Observations, Reads, SequencePrediction};
 use crate::augment::Batch;
 use crate::data::Joints;
 use crate::model::{
-    self, tensors, EncodedContexts, JointSigmaScale, Model, ModelError, ModelKind, Normalization,
-    Representation,
+    self, tensors, EncodedContexts, JointCorrelation, JointSigmaScale, Model, ModelError,
+    ModelKind, Normalization, Representation,
 };
 
 /// A trained model ready for inference on the CPU (flex backend): encode observations once,
@@ -16,6 +16,8 @@ pub struct Predictor {
     normalization: Normalization,
     /// The file's factors on the joint σ (1 without them; `dmbn calibrate`).
     joint_sigma_scale: JointSigmaScale,
+    /// How a step's joint errors go together, where the file says (`dmbn calibrate`).
+    joint_correlation: Option<JointCorrelation>,
     device: Device,
 }
 
@@ -32,6 +34,7 @@ impl Predictor {
             model,
             normalization,
             joint_sigma_scale: JointSigmaScale::NONE,
+            joint_correlation: None,
             device: Device::flex(),
         }
     }
@@ -50,9 +53,12 @@ impl Predictor {
     ) -> Result<Self, ModelError> {
         let (model, header) = model::load_with_header(bytes, &Device::flex(), kind, image_size)?;
         let scale = header.joint_sigma_scales();
+        let correlation = header.joint_correlation()?;
         // One constructor: the loaded weights are frozen as `new`'s are (not compared again
         // on every call).
-        Ok(Self::new(model, header.normalization).with_joint_sigma_scale(scale))
+        Self::new(model, header.normalization)
+            .with_joint_sigma_scale(scale)
+            .with_joint_correlation(correlation)
     }
 
     /// The predictor with its joint σ multiplied by `scale` (a calibration fitted after
@@ -65,6 +71,30 @@ impl Predictor {
     /// The factors on the joint σ: [`JointSigmaScale::NONE`] unless the file was calibrated.
     pub fn joint_sigma_scale(&self) -> JointSigmaScale {
         self.joint_sigma_scale
+    }
+
+    /// The predictor whose sampled futures draw each step's joints with `correlation`
+    /// (`None`: independently). Fails unless it correlates the model's D joint values.
+    pub fn with_joint_correlation(
+        mut self,
+        correlation: Option<JointCorrelation>,
+    ) -> Result<Self, ModelError> {
+        if let Some(r) = &correlation {
+            if r.joints() != self.joint_count() {
+                return Err(ModelError::Header(format!(
+                    "joint_correlation is {0} × {0}: expected {1} × {1}, one row per joint value the model predicts",
+                    r.joints(),
+                    self.joint_count()
+                )));
+            }
+        }
+        self.joint_correlation = correlation;
+        Ok(self)
+    }
+
+    /// How a step's joint errors go together, if the file was calibrated with them.
+    pub fn joint_correlation(&self) -> Option<&JointCorrelation> {
+        self.joint_correlation.as_ref()
     }
 
     /// The model file at `path`.

@@ -306,3 +306,17 @@ pub fn fixed_rows(joints: &dmbn::data::Joints) -> Vec<[f32; dmbn::data::JOINTS]>
         .map(|r| r.try_into().expect("JOINTS values a row"))
         .collect()
 }
+
+/// A model file's `bytes` with its header's `key` set to `value`, the weights and their
+/// checksum kept: a file that lies about itself, for the reader's checks.
+pub fn with_header_field(bytes: &[u8], key: &str, value: serde_json::Value) -> Vec<u8> {
+    let len = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    let mut header: serde_json::Value = serde_json::from_slice(&bytes[16..16 + len]).unwrap();
+    header[key] = value;
+    let header = serde_json::to_vec(&header).unwrap();
+    let mut out = bytes[..12].to_vec();
+    out.extend_from_slice(&(header.len() as u32).to_le_bytes());
+    out.extend_from_slice(&header);
+    out.extend_from_slice(&bytes[16 + len..]);
+    out
+}

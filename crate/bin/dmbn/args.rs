@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use clap::Args;
 
 use dmbn::data::{Dataset, Disk, Sequence, SequenceRef};
-use dmbn::futures::{Method, Order, Sampling};
+use dmbn::futures::{JointDraws, Method, Order, Sampling};
 use dmbn::predict::Predictor;
 
 use crate::error::CliError;
@@ -164,6 +164,10 @@ pub struct SamplingArgs {
     /// The order the grid is drawn in: left-to-right or random.
     #[arg(long, default_value_t = Sampling::default().order)]
     pub order: Order,
+    /// A drawn step's joints: `correlated` as the model file's joint correlation says (fitted
+    /// by `dmbn calibrate`), `independent`, or `auto` (correlated where the file holds one).
+    #[arg(long, default_value_t = Sampling::default().joints)]
+    pub joints: JointDraws,
     /// τ: each drawn step's σ is multiplied by this (below 1: futures nearer the mean).
     #[arg(long, default_value_t = Sampling::default().temperature)]
     pub temperature: f32,
@@ -181,6 +185,7 @@ impl SamplingArgs {
             method: self.method,
             grid: self.grid,
             order: self.order,
+            joints: self.joints,
             temperature: self.temperature,
             seed: self.seed,
         }

@@ -1,10 +1,15 @@
 //! `dmbn calibrate`: a model file's joint σ scaled so that mean ± 2σ holds about 95% of the
-//! truth on sequences it did not train on, between the observations and beyond them.
+//! truth on sequences it did not train on, between the observations and beyond them; and how
+//! a step's joint errors go together there, for sampled futures.
 use std::path::PathBuf;
 
-use clap::Args;
+use clap::{Args, ValueEnum};
 
-use dmbn::model::{with_joint_sigma_scale, JointSigmaScale};
+use dmbn::data::{Dataset, SequenceRef};
+use dmbn::futures::{drawn_step_errors, Sampling};
+use dmbn::model::{
+    with_joint_correlation, with_joint_sigma_scale, JointCorrelation, JointSigmaScale,
+};
 use dmbn::predict::Predictor;
 use dmbn::quality::{joint_z_scores, two_sigma_scale, JointZScores, Scenario, TWO_SIGMA};
 
@@ -34,17 +39,28 @@ pub struct CalibrateArgs {
     /// Blending coefficient c: 1 = images only, 0 = joints only.
     #[arg(long, default_value_t = 0.5, value_parser = parse_blend)]
     blend: f32,
+    /// What to fit: the joint σ scales, the joint correlation sampled futures draw with
+    /// (the errors at the steps they draw, finishing each sequence from its first 30%), or
+    /// both. What is not fitted is kept as the file has it.
+    #[arg(long, value_enum, default_value_t = Fit::Both)]
+    fit: Fit,
     /// Where to write the calibrated model file (the same weights, the scale in its header).
     #[arg(long)]
     out: PathBuf,
 }
 
-/// Pools the joints' standardised errors of both scenarios of the quality benchmark and
-/// scales σ so that ±2σ covers 95.45% of them: apart between the observations and outside
-/// their span (forecasting), where a model errs differently.
+#[derive(Clone, Copy, PartialEq, ValueEnum)]
+enum Fit {
+    Both,
+    Sigma,
+    Correlation,
+}
+
+/// Fits what `--fit` names on the ids and writes the file with it.
 pub fn run(args: CalibrateArgs) -> Result<(), CliError> {
     let predictor = Predictor::load(&args.model)?;
-    if predictor.model().joint_stage().is_some() && args.blend == 1.0 {
+    let sigma = args.fit != Fit::Correlation;
+    if sigma && predictor.model().joint_stage().is_some() && args.blend == 1.0 {
         return Err(CliError::Usage(format!(
             "{}: --blend 1: this file's joint stage answers frames-only predictions between the \
              observations with its own σ (fitted with the stage), which the scales do not touch; \
@@ -52,23 +68,45 @@ pub fn run(args: CalibrateArgs) -> Result<(), CliError> {
             args.model.display()
         )));
     }
-    let bytes = std::fs::read(&args.model).map_err(|source| CliError::Io {
+    let mut bytes = std::fs::read(&args.model).map_err(|source| CliError::Io {
         path: args.model.clone(),
         source,
     })?;
     let models = [(args.model.as_path(), &predictor)];
     let dataset = open_for(&args.data, args.camera.as_deref(), &models)?;
-    let (a, b) = args.ids;
     let refs = sequences_in(&dataset, &args.data, Some(args.ids))?;
+    if sigma {
+        bytes = fit_sigma(&args, &predictor, &dataset, &refs, &bytes)?;
+    }
+    if args.fit != Fit::Sigma {
+        bytes = fit_correlation(&args, &predictor, &dataset, &refs, &bytes)?;
+    }
+    write(&args.out, &bytes)?;
+    println!("wrote {}", args.out.display());
+    Ok(())
+}
+
+/// `bytes` with σ scales fitted on `refs`: the joints' standardised errors of both scenarios
+/// of the quality benchmark pooled, and σ scaled so that ±2σ covers 95.45% of them, apart
+/// between the observations and outside their span (forecasting), where a model errs
+/// differently.
+fn fit_sigma(
+    args: &CalibrateArgs,
+    predictor: &Predictor,
+    dataset: &Dataset,
+    refs: &[&SequenceRef],
+    bytes: &[u8],
+) -> Result<Vec<u8>, CliError> {
+    let (a, b) = args.ids;
     let size = predictor.model().image_size() as u32;
-    let bar = progress(refs.len(), "calibrating");
+    let bar = progress(refs.len(), "calibrating σ");
     let mut z = JointZScores::default();
     for r in refs {
         let seq = dataset.read(r, Some(size))?;
         for scenario in Scenario::ALL {
             let observations = args.observations as usize;
             z.extend(joint_z_scores(
-                &predictor,
+                predictor,
                 &seq,
                 scenario,
                 observations,
@@ -90,7 +128,6 @@ pub fn run(args: CalibrateArgs) -> Result<(), CliError> {
         between: between as f32,
         forecast: forecast.map(|f| f as f32),
     });
-    write(&args.out, &with_joint_sigma_scale(&bytes, scale)?)?;
     println!(
         "joint σ × {between:.3} between the observations: ±2σ held {:.1}% of the joints on ids {a}-{b}, now {:.1}%",
         100.0 * held(&z.between),
@@ -108,6 +145,61 @@ pub fn run(args: CalibrateArgs) -> Result<(), CliError> {
         scale.between,
         scale.forecast.unwrap_or(scale.between)
     );
-    println!("wrote {}", args.out.display());
-    Ok(())
+    Ok(with_joint_sigma_scale(bytes, scale)?)
+}
+
+/// `bytes` with the joint correlation of the steps sampled futures draw (the default grid,
+/// each sequence finished from its first 30%, as `dmbn imitate --task finish`) on `refs`.
+fn fit_correlation(
+    args: &CalibrateArgs,
+    predictor: &Predictor,
+    dataset: &Dataset,
+    refs: &[&SequenceRef],
+    bytes: &[u8],
+) -> Result<Vec<u8>, CliError> {
+    let (a, b) = args.ids;
+    let size = predictor.model().image_size() as u32;
+    let grid = Sampling::default().grid;
+    let bar = progress(refs.len(), "fitting the joint correlation");
+    let mut errors = Vec::new();
+    for r in refs {
+        let seq = dataset.read(r, Some(size))?;
+        let Some(steps) = Scenario::Extrap.steps(seq.len(), Scenario::EXTRAP_OBSERVATIONS) else {
+            continue;
+        };
+        let imagined: Vec<usize> = (steps.scored.iter())
+            .filter(|k| !steps.observed.contains(k))
+            .copied()
+            .collect();
+        errors.extend(drawn_step_errors(
+            predictor,
+            &seq,
+            &steps.observed,
+            &imagined,
+            args.blend,
+            grid,
+        )?);
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    let d = predictor.joint_count();
+    let correlation = JointCorrelation::fit(&errors, d).ok_or_else(|| {
+        CliError::Usage(format!(
+            "ids {a}-{b}: {} drawn steps to fit the joint correlation on: expected 2 or more",
+            errors.len()
+        ))
+    })?;
+    let r = correlation.values();
+    let (i, j) = (0..d * d)
+        .filter(|k| k / d != k % d)
+        .max_by(|&x, &y| r[x].abs().total_cmp(&r[y].abs()))
+        .map_or((0, 0), |k| (k / d, k % d));
+    println!(
+        "joint correlation of sampled futures' drawn steps: {} steps of {} sequences on ids {a}-{b} ({grid} a future, blend {}); strongest r = {:.2} (joint values {i} and {j})",
+        errors.len(),
+        refs.len(),
+        args.blend,
+        r[i * d + j]
+    );
+    Ok(with_joint_correlation(bytes, Some(&correlation))?)
 }

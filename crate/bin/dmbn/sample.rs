@@ -74,7 +74,8 @@ pub fn run(args: SampleArgs) -> Result<(), CliError> {
     }
     // `auto` resolved: the report says how this model's futures were drawn.
     let has_latent = predictor.model().latent_size().is_some();
-    let sampling = args.sampling.sampling(args.samples).resolved(has_latent);
+    let has_correlation = predictor.joint_correlation().is_some();
+    let sampling = (args.sampling.sampling(args.samples)).resolved(has_latent, has_correlation);
     let times = seq.times();
     let future: Vec<f32> = imagined.iter().map(|&k| times[k]).collect();
     // The observations encoded once: for the futures and for the single mean.

@@ -1,0 +1,185 @@
+//! The joint correlation sampled futures draw with (`JointCorrelation`, `dmbn calibrate
+//! --fit correlation`): a drawn step's joints vary together as the file's correlation says,
+//! independently without one or when asked; the file carries it and refuses a bad one by name.
+#![cfg(not(target_arch = "wasm32"))]
+
+mod support;
+
+use std::process::Command;
+
+use dmbn::futures::{draw_futures, JointDraws, Sampling};
+use dmbn::imitate::Task;
+use dmbn::model::{read_header, JointCorrelation};
+use dmbn::predict::{Observations, Predictor};
+use dmbn::sim::{episode, Action};
+
+fn predictor() -> Predictor {
+    Predictor::load(support::asset("models/attn-sim.dmbn")).unwrap()
+}
+
+/// Pearson's correlation of two columns.
+fn pearson(a: &[f64], b: &[f64]) -> f64 {
+    let n = a.len() as f64;
+    let (ma, mb) = (a.iter().sum::<f64>() / n, b.iter().sum::<f64>() / n);
+    let cov: f64 = a.iter().zip(b).map(|(x, y)| (x - ma) * (y - mb)).sum();
+    let va: f64 = a.iter().map(|x| (x - ma).powi(2)).sum();
+    let vb: f64 = b.iter().map(|y| (y - mb).powi(2)).sum();
+    cov / (va * vb).sqrt()
+}
+
+#[test]
+fn a_drawn_step_s_joints_vary_as_the_correlation_says() {
+    let d = predictor().joint_count();
+    // Joint values 0 and 1 together (0.9), 2 against 3 (-0.8), the rest on their own.
+    let mut r = vec![0.0f32; d * d];
+    for i in 0..d {
+        r[i * d + i] = 1.0;
+    }
+    for (i, j, v) in [(0, 1, 0.9f32), (2, 3, -0.8)] {
+        r[i * d + j] = v;
+        r[j * d + i] = v;
+    }
+    let correlation = JointCorrelation::new("r", r, d).unwrap();
+    let p = predictor()
+        .with_joint_correlation(Some(correlation))
+        .unwrap();
+    let demo = episode(Action::Move, 626_262, 64).unwrap();
+    let steps = Task::Finish.steps(demo.len(), 5).unwrap();
+    let observations = Observations::from_sequence(&demo, &steps.observed).unwrap();
+    let times = demo.times();
+    let future = &times[steps.predicted_from..];
+    // One drawn step (the last): its Gaussian is the prediction given the observations alone.
+    let t = *future.last().unwrap();
+    let marginal = p.predict(&observations, &[t], 0.5).unwrap();
+    let (mean, sigma) = (marginal.joint_mean_at(0), marginal.joint_sigma_at(0));
+    let standardised = |joints: JointDraws| {
+        let sampling = Sampling {
+            samples: 200,
+            grid: 1,
+            temperature: 1.0,
+            joints,
+            ..Sampling::default()
+        };
+        let futures = draw_futures(&p, &observations, future, 0.5, &sampling).unwrap();
+        let column = |j: usize| -> Vec<f64> {
+            let drawn = futures.iter().map(|f| &f.drawn[0].1);
+            drawn
+                .map(|x| ((x[j] - mean[j]) / sigma[j]) as f64)
+                .collect()
+        };
+        (0..d).map(column).collect::<Vec<_>>()
+    };
+    let z = standardised(JointDraws::Auto);
+    let (r01, r23, r04) = (
+        pearson(&z[0], &z[1]),
+        pearson(&z[2], &z[3]),
+        pearson(&z[0], &z[4]),
+    );
+    assert!((r01 - 0.9).abs() < 0.06, "r01 {r01}");
+    assert!((r23 + 0.8).abs() < 0.08, "r23 {r23}");
+    assert!(r04.abs() < 0.2, "r04 {r04}");
+    // Each joint keeps its Gaussian: unit variance once standardised.
+    for (j, column) in z.iter().enumerate() {
+        let var = column.iter().map(|v| v * v).sum::<f64>() / column.len() as f64;
+        assert!((0.75..1.3).contains(&var), "joint {j}: variance {var}");
+    }
+    let independent = standardised(JointDraws::Independent);
+    let r01 = pearson(&independent[0], &independent[1]);
+    assert!(r01.abs() < 0.2, "independent r01 {r01}");
+    // Asked for correlated joints, a file without a correlation is refused by name.
+    let plain = predictor().with_joint_correlation(None).unwrap();
+    let sampling = Sampling {
+        joints: JointDraws::Correlated,
+        ..Sampling::default()
+    };
+    let err = draw_futures(&plain, &observations, future, 0.5, &sampling).unwrap_err();
+    assert!(err.to_string().contains("joints"), "{err}");
+    let wrong = JointCorrelation::new("r", vec![1.0, 0.0, 0.0, 1.0], 2).unwrap();
+    let err = predictor().with_joint_correlation(Some(wrong)).unwrap_err();
+    assert!(err.to_string().contains("2 × 2"), "{err}");
+}
+
+#[test]
+fn dmbn_calibrate_fits_the_correlation_and_a_bad_one_is_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("data");
+    support::simulated_dataset(&data, 0..4, &Action::ALL, 420_000);
+    let model = support::asset("models/attn-sim.dmbn");
+    let before = read_header(&std::fs::read(&model).unwrap()).unwrap();
+    let calibrate = |fit: &str, out: &std::path::Path| {
+        let run = Command::new(env!("CARGO_BIN_EXE_dmbn"))
+            .arg("calibrate")
+            .args(["--model".as_ref(), model.as_os_str()])
+            .args(["--data".as_ref(), data.as_os_str()])
+            .args(["--ids", "0-3", "--fit", fit, "--out"])
+            .arg(out)
+            .output()
+            .unwrap();
+        let stdout = String::from_utf8_lossy(&run.stdout).to_string();
+        assert!(
+            run.status.success(),
+            "{stdout}{}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+        (read_header(&std::fs::read(out).unwrap()).unwrap(), stdout)
+    };
+    // The correlation alone: the σ scales as they were; 2 drawn steps of 8 sequences.
+    let out = tmp.path().join("correlated.dmbn");
+    let (header, stdout) = calibrate("correlation", &out);
+    assert!(stdout.contains("16 steps of 8 sequences"), "{stdout}");
+    assert_eq!(header.joint_sigma_scales(), before.joint_sigma_scales());
+    let d = header.config.joint_count();
+    let r = header.joint_correlation().unwrap().expect("a correlation");
+    assert_eq!(r.values().len(), d * d);
+    assert!(r
+        .values()
+        .iter()
+        .enumerate()
+        .any(|(k, v)| k / d != k % d && v.abs() > 0.3));
+    // The σ scales alone keep the file's correlation.
+    let (sigma, _) = calibrate("sigma", &tmp.path().join("sigma.dmbn"));
+    assert_eq!(sigma.joint_correlation, before.joint_correlation);
+    assert_ne!(sigma.joint_sigma_scales(), before.joint_sigma_scales());
+    // A file whose correlation is not one is refused, naming the field.
+    let bytes = std::fs::read(&out).unwrap();
+    for bad in [
+        serde_json::json!([1.0, 2.0]),
+        serde_json::json!(vec![1.5f32; d * d]),
+    ] {
+        let err = Predictor::from_bytes(&support::with_header_field(
+            &bytes,
+            "joint_correlation",
+            bad,
+        ))
+        .unwrap_err();
+        assert!(err.to_string().contains("joint_correlation"), "{err}");
+    }
+    // `--joints independent` draws other futures than the file's correlation.
+    let sample = |joints: &str, dir: &str| {
+        let run = Command::new(env!("CARGO_BIN_EXE_dmbn"))
+            .arg("sample")
+            .args(["--model".as_ref(), out.as_os_str()])
+            .args(["--data".as_ref(), data.as_os_str()])
+            .args([
+                "--sequence",
+                "1/move",
+                "--observe",
+                "0,5,10",
+                "--samples",
+                "3",
+            ])
+            .args(["--joints", joints, "--out"])
+            .arg(tmp.path().join(dir))
+            .output()
+            .unwrap();
+        assert!(
+            run.status.success(),
+            "{}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+        std::fs::read_to_string(tmp.path().join(dir).join("samples.json")).unwrap()
+    };
+    let correlated = sample("auto", "correlated");
+    assert!(correlated.contains("\"correlated\""), "{correlated}");
+    assert_ne!(correlated, sample("independent", "independent"));
+}
