@@ -4,7 +4,7 @@
 #
 #   bash docs/futures.sh design [OUT]   # the design set (seeds 1000000-): the sampling settings compared
 #   bash docs/futures.sh final  [OUT]   # the three fresh sets (seeds 1100000-, 1200000-, 1300000-): the reported table
-#                                       # (futures with the file's joint correlation, and with independent joints)
+#                                       # (the defaults; the 8 as drawn; drawn with independent joints)
 #   bash docs/futures.sh latent [OUT]   # the latent path against autoregressive sampling, on the design set
 #   bash docs/futures.sh script         # what 8 futures drawn from the simulator's script itself would score
 #
@@ -52,34 +52,44 @@ PY
 
 case $what in
   design)
-    set=$(data 1000000)
-    # grid order τ joints: the settings compared (the defaults: 2 left-to-right 0.7, joints
-    # correlated as attn-sim.dmbn's joint correlation says).
-    for cfg in "1 left-to-right 1 independent" "2 left-to-right 1 independent" \
-      "3 left-to-right 1 independent" "4 left-to-right 1 independent" "8 left-to-right 1 independent" \
-      "4 random 1 independent" "8 random 1 independent" "2 left-to-right 0.85 independent" \
-      "2 left-to-right 0.7 independent" "3 left-to-right 0.7 independent" "2 left-to-right 0.5 independent" \
-      "2 left-to-right 0.7 correlated" "2 left-to-right 0.85 correlated" "2 left-to-right 1 correlated" \
-      "3 left-to-right 0.85 correlated" "3 left-to-right 1 correlated"; do
-      read -r grid order tau joints <<<"$cfg"
-      name="$out/design-g$grid-$order-t$tau-$joints"
-      "$dmbn" imitate --model "$model" --data "$set" --task finish --samples 8 --grid "$grid" \
-        --order "$order" --temperature "$tau" --joints "$joints" --json "$name.json" >"$name.txt"
-      grep -A5 "sampled futures each" "$name.txt" | grep '^| [gm]' | sed "s/^/g$grid $order τ$tau $joints /"
+    # grid order τ joints K (oversample) sets: the settings compared on the design set, those
+    # of the oversampling on a second one too (seeds 1400000-). The defaults: 2 left-to-right
+    # 0.7 correlated 4 (the 8 representatives of 32 drawn).
+    for cfg in "1 left-to-right 1 independent 1 1" "2 left-to-right 1 independent 1 1" \
+      "3 left-to-right 1 independent 1 1" "4 left-to-right 1 independent 1 1" "8 left-to-right 1 independent 1 1" \
+      "4 random 1 independent 1 1" "8 random 1 independent 1 1" "2 left-to-right 0.85 independent 1 1" \
+      "2 left-to-right 0.7 independent 1 1" "3 left-to-right 0.7 independent 1 1" "2 left-to-right 0.5 independent 1 1" \
+      "2 left-to-right 0.7 correlated 1 2" "2 left-to-right 0.85 correlated 1 1" "2 left-to-right 1 correlated 1 1" \
+      "3 left-to-right 0.85 correlated 1 1" "3 left-to-right 1 correlated 1 1" \
+      "2 left-to-right 0.7 correlated 2 2" "2 left-to-right 0.7 correlated 4 2" "2 left-to-right 0.7 correlated 8 2" \
+      "2 left-to-right 0.85 correlated 4 2" "2 left-to-right 1 correlated 4 1"; do
+      read -r grid order tau joints k sets <<<"$cfg"
+      for seed in 1000000 1400000; do
+        [ "$seed" = 1400000 ] && [ "$sets" = 1 ] && continue
+        set=$(data $seed)
+        name="$out/design-$seed-g$grid-$order-t$tau-$joints-k$k"
+        "$dmbn" imitate --model "$model" --data "$set" --task finish --samples 8 --grid "$grid" \
+          --order "$order" --temperature "$tau" --joints "$joints" --oversample "$k" --json "$name.json" >"$name.txt"
+        grep -A5 "sampled futures each" "$name.txt" | grep '^| [gm]' | sed "s/^/$seed g$grid $order τ$tau $joints K$k /"
+      done
     done
     ;;
   final)
     for seed in 1100000 1200000 1300000; do
       set=$(data $seed)
       "$dmbn" imitate --model "$model" --data "$set" --task finish --samples 8 --json "$out/finish-$seed.json" | tee "$out/finish-$seed.txt"
-      "$dmbn" imitate --model "$model" --data "$set" --task finish --samples 8 --joints independent \
+      # The 8 as drawn (no representatives), and drawn with independent joints.
+      "$dmbn" imitate --model "$model" --data "$set" --task finish --samples 8 --oversample 1 \
+        --json "$out/finish-drawn-$seed.json" | tee "$out/finish-drawn-$seed.txt"
+      "$dmbn" imitate --model "$model" --data "$set" --task finish --samples 8 --oversample 1 --joints independent \
         --json "$out/finish-independent-$seed.json" | tee "$out/finish-independent-$seed.txt"
       "$dmbn" imitate --model "$model" --data "$set" --task frames --json "$out/frames-$seed.json" | tee "$out/frames-$seed.txt"
       "$dmbn" score --model "$model" --data "$set" --scenario extrap --samples 8 --json "$out/score-$seed.json" | tee "$out/score-$seed.txt"
     done
     for seed in 1100000 1200000 1300000; do
-      spread "$out/finish-$seed.json" "set $seed, correlated"
-      spread "$out/finish-independent-$seed.json" "set $seed, independent"
+      spread "$out/finish-$seed.json" "set $seed, the defaults"
+      spread "$out/finish-drawn-$seed.json" "set $seed, as drawn"
+      spread "$out/finish-independent-$seed.json" "set $seed, as drawn, independent joints"
     done
     ;;
   latent)
@@ -127,8 +137,8 @@ case $what in
       grep -A5 "sampled futures each" "$out/latent-$run.txt" | grep '^| [gm]' | sed "s/^/$run /"
       spread "$out/latent-$run.json" "$run"
     done
-    for joints in independent correlated; do
-      spread "$out/design-g2-left-to-right-t0.7-$joints.json" "attn-sim-ar-0.7-$joints (bash docs/futures.sh design)"
+    for run in independent-k1 correlated-k1 correlated-k4; do
+      spread "$out/design-1000000-g2-left-to-right-t0.7-$run.json" "attn-sim-ar-0.7-$run (bash docs/futures.sh design)"
     done
     ;;
   script)

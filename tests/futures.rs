@@ -52,8 +52,10 @@ fn sampled_futures_are_smooth_spread_and_deterministic() {
     let observations = Observations::from_sequence(&demo, &steps.observed).unwrap();
     let times = demo.times();
     let future = &times[steps.predicted_from..];
+    // Drawn as such (no representatives), so that future s is the same whatever S.
     let sampling = Sampling {
         samples: 6,
+        oversample: 1,
         ..Sampling::default()
     };
     let futures = sample_trajectories(&p, &observations, future, &times, 0.5, &sampling).unwrap();
@@ -139,6 +141,64 @@ fn sampled_futures_are_smooth_spread_and_deterministic() {
     assert!(err.to_string().contains("samples"), "{err}");
     let err = draw_futures(&p, &observations, &[], 0.5, &sampling).unwrap_err();
     assert!(err.to_string().contains("target_times"), "{err}");
+}
+
+/// Oversampled: S representatives of K × S futures, each one of those drawn (the K × S of
+/// plain sampling with the same seed), spread over them better than the first S drawn.
+#[test]
+fn oversampled_futures_are_representatives_of_more_draws() {
+    let p = predictor();
+    let demo = episode(Action::Move, 434_343, 64).unwrap();
+    let steps = Task::Finish.steps(demo.len(), 5).unwrap();
+    let observations = Observations::from_sequence(&demo, &steps.observed).unwrap();
+    let future = &demo.times()[steps.predicted_from..];
+    let sampling = Sampling {
+        samples: 6,
+        oversample: 1,
+        ..Sampling::default()
+    };
+    let kept = Sampling {
+        oversample: 4,
+        ..sampling
+    };
+    let all = Sampling {
+        samples: 24,
+        ..sampling
+    };
+    let drawn = |s: &Sampling| -> Vec<Vec<f32>> {
+        let futures = draw_futures(&p, &observations, future, 0.5, s).unwrap();
+        (futures.iter())
+            .map(|f| f.drawn.iter().flat_map(|(_, j)| j.clone()).collect())
+            .collect()
+    };
+    let (kept, all) = (drawn(&kept), drawn(&all));
+    assert_eq!(kept.len(), 6);
+    for (i, k) in kept.iter().enumerate() {
+        assert!(all.contains(k), "kept future {i} was not drawn");
+        assert!(!kept[..i].contains(k), "future {i} kept twice");
+    }
+    // Covering radius: how far the draws are from the nearest of the six.
+    let radius = |six: &[Vec<f32>]| {
+        (all.iter())
+            .map(|x| {
+                (six.iter())
+                    .map(|y| x.iter().zip(y).map(|(a, b)| (a - b).powi(2)).sum::<f32>())
+                    .fold(f32::INFINITY, f32::min)
+            })
+            .sum::<f32>()
+    };
+    assert!(
+        radius(&kept) < radius(&all[..6]),
+        "representatives {} vs the first six {}",
+        radius(&kept),
+        radius(&all[..6])
+    );
+    let bad = Sampling {
+        oversample: 0,
+        ..sampling
+    };
+    let err = draw_futures(&p, &observations, future, 0.5, &bad).unwrap_err();
+    assert!(err.to_string().contains("oversample"), "{err}");
 }
 
 #[test]

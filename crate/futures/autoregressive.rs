@@ -1,10 +1,10 @@
 use rand::{RngExt, SeedableRng};
 use rand_pcg::Pcg64;
 
-use super::{FutureScores, JointDraws, Method, Order, Sampling};
+use super::{representatives, FutureScores, JointDraws, Method, Order, Sampling};
 use crate::data::{Joints, Sequence};
 use crate::model::{values, EncodedContexts, ModelError};
-use crate::predict::{Encoding, Observations, Predictor};
+use crate::predict::{Encoding, Observations, Predictor, SequencePrediction};
 
 /// One sampled future: what the decoders condition on once its steps are drawn, and the draws.
 #[derive(Debug, Clone)]
@@ -73,7 +73,8 @@ pub fn draw_futures_from(
         (_, correlation) => correlation,
     };
     let grid = grid(target_times, sampling.grid);
-    (0..sampling.samples)
+    let mut first = Vec::new();
+    let candidates = (0..sampling.samples * sampling.oversample)
         .map(|s| {
             let mut rng = future_rng(sampling, s);
             let mut order = grid.clone();
@@ -82,8 +83,13 @@ pub fn draw_futures_from(
                     order.swap(i, rng.random_range(0..=i));
                 }
             }
-            let (contexts, drawn) =
-                condition_on_steps(predictor, observed, &order, blend, |_, mean, sigma| {
+            condition_on_steps(
+                predictor,
+                observed,
+                &order,
+                blend,
+                &mut first,
+                |_, mean, sigma| {
                     let eps: Vec<f32> = mean.iter().map(|_| standard_normal(&mut rng)).collect();
                     let eps = match correlation {
                         Some(r) => r.correlate(&eps),
@@ -91,7 +97,25 @@ pub fn draw_futures_from(
                     };
                     let draw = mean.iter().zip(sigma).zip(eps);
                     (draw.map(|((m, s), e)| m + sampling.temperature * s * e)).collect()
-                })?;
+                },
+            )
+        })
+        .collect::<Result<Vec<_>, ModelError>>()?;
+    // Where more were drawn than asked for, the representatives of their drawn steps (in
+    // time order, each joint in the units the model normalises it by).
+    let features: Vec<Vec<f32>> = (candidates.iter())
+        .map(|(_, drawn)| {
+            let mut drawn: Vec<&(f32, Vec<f32>)> = drawn.iter().collect();
+            drawn.sort_by(|a, b| a.0.total_cmp(&b.0));
+            let rows = drawn.into_iter();
+            (rows.flat_map(|(_, joints)| predictor.normalization().normalize(joints))).collect()
+        })
+        .collect();
+    let keep = representatives(&features, sampling.samples);
+    let mut candidates: Vec<_> = candidates.into_iter().map(Some).collect();
+    keep.into_iter()
+        .map(|i| {
+            let (contexts, drawn) = candidates[i].take().expect("each candidate kept once");
             Ok(Future {
                 encoding: predictor.represent(&contexts, blend)?,
                 drawn,
@@ -103,20 +127,31 @@ pub fn draw_futures_from(
 /// The observations plus `steps` taken one after another: at each, `joints_at(k, μ, σ)` gives
 /// the joints from the Gaussian predicted there given the contexts before it (a draw, or the
 /// truth when fitting), added to the contexts with the mean frame predicted there. The
-/// contexts and the steps taken.
+/// contexts and the steps taken. The first step's prediction, given the observations alone, is
+/// the same for every future: `first` keeps it per time, decoded once.
 #[allow(clippy::type_complexity)]
 fn condition_on_steps(
     predictor: &Predictor,
     observed: &EncodedContexts,
     steps: &[f32],
     blend: f32,
+    first: &mut Vec<(f32, SequencePrediction)>,
     mut joints_at: impl FnMut(usize, &[f32], &[f32]) -> Vec<f32>,
 ) -> Result<(EncodedContexts, Vec<(f32, Vec<f32>)>), ModelError> {
     let image_size = predictor.model().image_size();
     let mut contexts = observed.clone();
     let mut taken = Vec::with_capacity(steps.len());
     for (k, &t) in steps.iter().enumerate() {
-        let here = predictor.decode(&predictor.represent(&contexts, blend)?, &[t])?;
+        let known = (k == 0)
+            .then(|| first.iter().find(|(u, _)| *u == t))
+            .flatten();
+        let here = match known {
+            Some((_, here)) => here.clone(),
+            None => predictor.decode(&predictor.represent(&contexts, blend)?, &[t])?,
+        };
+        if k == 0 && known.is_none() {
+            first.push((t, here.clone()));
+        }
         let joints = joints_at(k, here.joint_mean_at(0), here.joint_sigma_at(0));
         let step = Observations {
             image_size,
@@ -152,11 +187,18 @@ pub fn drawn_step_errors(
         .map(|&k| &seq.joints[k])
         .collect();
     let mut errors = Vec::with_capacity(steps.len());
-    condition_on_steps(predictor, &observed, &steps, blend, |k, mean, sigma| {
-        let error = (truth[k].iter().zip(mean).zip(sigma)).map(|((y, m), s)| (y - m) / s);
-        errors.push(error.collect());
-        truth[k].to_vec()
-    })?;
+    condition_on_steps(
+        predictor,
+        &observed,
+        &steps,
+        blend,
+        &mut Vec::new(),
+        |k, mean, sigma| {
+            let error = (truth[k].iter().zip(mean).zip(sigma)).map(|((y, m), s)| (y - m) / s);
+            errors.push(error.collect());
+            truth[k].to_vec()
+        },
+    )?;
     Ok(errors)
 }
 
@@ -275,7 +317,10 @@ pub fn frames_at(
 }
 
 /// S futures of `seq` from its `observed` steps scored against it at the `imagined` ones
-/// (increasing), beside the single mean's prediction ([`FutureScores`]).
+/// (increasing), beside the single mean's prediction ([`FutureScores`]). The futures are
+/// scored as drawn, never as representatives ([`Sampling::as_drawn`]): the energy score
+/// is proper for draws from the predictive distribution, and representatives spread wider
+/// than draws would flatter it.
 pub fn score_futures(
     predictor: &Predictor,
     seq: &Sequence,
@@ -288,7 +333,7 @@ pub fn score_futures(
     let observed = predictor.encode_contexts(&Observations::from_sequence(seq, observed)?)?;
     let times = seq.times();
     let at: Vec<f32> = imagined.iter().map(|&k| times[k]).collect();
-    let futures = draw_futures_from(predictor, &observed, &at, blend, sampling)?;
+    let futures = draw_futures_from(predictor, &observed, &at, blend, &sampling.as_drawn())?;
     let futures = trajectories(predictor, &futures, &at)?;
     let mean = predictor.decode_joints(&predictor.represent(&observed, blend)?, &at)?;
     let truth = Joints::from_slices(seq.joints.width(), imagined.iter().map(|&k| &seq.joints[k]));

@@ -7,11 +7,15 @@
 //! `ar_predict`), the same network gives coherent samples: the future is drawn at a sparse grid
 //! of target steps one after another, each draw (joints, and the predicted frame there) added
 //! to the contexts before the next, then the mean at every step is decoded conditioned on the
-//! contexts plus the drawn points: one smooth trajectory per sample ([`draw_futures`]).
+//! contexts plus the drawn points: one smooth trajectory per sample ([`draw_futures`]). A
+//! drawn step's joints vary together as the model file's [`crate::model::JointCorrelation`]
+//! says, and by default the S futures kept are the [`representatives`] of more draws, so that
+//! they spread over what may happen instead of clumping.
 //! [`EnergyScore`] judges a set of sampled trajectories against the truth (a strictly proper
 //! score for samples), beside the single mean's.
 mod autoregressive;
 mod energy_score;
+mod representatives;
 mod sampling;
 
 pub use autoregressive::{
@@ -19,4 +23,5 @@ pub use autoregressive::{
     sample_trajectories, sample_unobserved, score_futures, trajectories, Future,
 };
 pub use energy_score::{EnergyScore, FutureScoreRow, FutureScoreSums, FutureScores};
+pub use representatives::representatives;
 pub use sampling::{JointDraws, Method, Order, Sampling};

@@ -148,6 +148,9 @@ pub struct Sampling {
     pub order: Order,
     /// A drawn step's joints: correlated as the model file says, or each on its own.
     pub joints: JointDraws,
+    /// K: autoregressive futures drawn K × S, of which the S representatives are kept
+    /// ([`super::representatives`]); 1: the S drawn. Latent futures are drawn as such.
+    pub oversample: usize,
     /// τ: each step (or the latent z) is drawn from N(μ, (τσ)²); below 1 the futures keep
     /// nearer the mean.
     pub temperature: f32,
@@ -168,6 +171,7 @@ impl Default for Sampling {
             grid: 2,
             order: Order::LeftToRight,
             joints: JointDraws::Auto,
+            oversample: 4,
             temperature: 0.7,
             seed: 0,
         }
@@ -179,6 +183,8 @@ impl Sampling {
     pub const MAX_SAMPLES: usize = 256;
     /// At most this many drawn steps per future.
     pub const MAX_GRID: usize = 64;
+    /// At most this many futures drawn for S representatives.
+    pub const MAX_OVERSAMPLE: usize = 16;
 
     /// The same sampling drawn from seed + `offset` (each sequence of a set its own draws).
     pub fn reseeded(&self, offset: u64) -> Sampling {
@@ -196,13 +202,25 @@ impl Sampling {
             JointDraws::Correlated => "joints correlated",
             JointDraws::Independent => "joints independent",
         };
-        let ar = format!("{} steps drawn, {}, {joints}", self.grid, self.order);
+        let mut ar = format!("{} steps drawn, {}, {joints}", self.grid, self.order);
+        if self.oversample > 1 {
+            ar += &format!(", the representatives of {} × S", self.oversample);
+        }
         let how = match self.method {
             Method::Latent => "latent path".to_string(),
             Method::Ar => ar,
             Method::Auto => format!("a model's latent path, or without one {ar}"),
         };
         format!("{how}, τ {}, seed {}", self.temperature, self.seed)
+    }
+
+    /// The same sampling without representatives: S futures as drawn (what the energy score
+    /// judges; see [`super::score_futures`]).
+    pub fn as_drawn(&self) -> Sampling {
+        Sampling {
+            oversample: 1,
+            ..*self
+        }
     }
 
     /// The sampling as drawn for a model with or without a latent path and a joint
@@ -244,6 +262,16 @@ impl Sampling {
                 format!(
                     "is {}: expected a factor on σ from 0 to 4",
                     self.temperature
+                ),
+            ));
+        }
+        if !(1..=Self::MAX_OVERSAMPLE).contains(&self.oversample) {
+            return Err(ModelError::observation(
+                "oversample",
+                format!(
+                    "is {}: expected 1 to {} futures drawn per future kept",
+                    self.oversample,
+                    Self::MAX_OVERSAMPLE
                 ),
             ));
         }

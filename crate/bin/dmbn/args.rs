@@ -168,6 +168,10 @@ pub struct SamplingArgs {
     /// by `dmbn calibrate`), `independent`, or `auto` (correlated where the file holds one).
     #[arg(long, default_value_t = Sampling::default().joints)]
     pub joints: JointDraws,
+    /// K: draw K × S autoregressive futures and keep their S representatives (k-means over
+    /// the drawn steps), so that the S spread over what may happen; 1: the S drawn.
+    #[arg(long, default_value_t = Sampling::default().oversample)]
+    pub oversample: usize,
     /// τ: each drawn step's σ is multiplied by this (below 1: futures nearer the mean).
     #[arg(long, default_value_t = Sampling::default().temperature)]
     pub temperature: f32,
@@ -186,6 +190,7 @@ impl SamplingArgs {
             grid: self.grid,
             order: self.order,
             joints: self.joints,
+            oversample: self.oversample,
             temperature: self.temperature,
             seed: self.seed,
         }

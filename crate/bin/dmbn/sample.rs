@@ -9,7 +9,7 @@ use serde::Serialize;
 
 use dmbn::data::{Joints, Sequence};
 use dmbn::figure::{joint_plot, save_png, JointPlot};
-use dmbn::futures::{draw_futures_from, trajectories, Future, FutureScores, Sampling};
+use dmbn::futures::{draw_futures_from, trajectories, Future, FutureScores, Method, Sampling};
 use dmbn::predict::{Observations, Predictor, SequencePrediction};
 
 use crate::args::{Observing, SamplingArgs};
@@ -147,8 +147,14 @@ pub fn run(args: SampleArgs) -> Result<(), CliError> {
         }
         .describe()
     );
+    // Representatives spread wider than draws: their energy score flatters them.
+    let kept = if sampling.oversample > 1 && sampling.method == Method::Ar {
+        " (of representatives, not draws: dmbn score judges draws)"
+    } else {
+        ""
+    };
     println!(
-        "arm joints over the {} imagined steps (rad): energy score {:.4} (the single mean's {:.4}), best of {} {:.4}, a future's RMSE {:.4}",
+        "arm joints over the {} imagined steps (rad): energy score{kept} {:.4} (the single mean's {:.4}), best of {} {:.4}, a future's RMSE {:.4}",
         imagined.len(),
         scores.energy,
         scores.energy_of_mean,

@@ -118,7 +118,9 @@ pub fn run(args: ScoreArgs) -> Result<(), CliError> {
     }
 
     let observations = args.observations as usize;
-    let sampling = (args.samples > 0).then(|| args.sampling.sampling(args.samples as usize));
+    // Scored as drawn, never as representatives (`score_futures`): the report says so.
+    let sampling =
+        (args.samples > 0).then(|| args.sampling.sampling(args.samples as usize).as_drawn());
     let mut reports = Vec::new();
     for &scenario in &scenarios {
         let mut baseline = Accumulator::default();
