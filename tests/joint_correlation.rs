@@ -53,10 +53,12 @@ fn a_drawn_step_s_joints_vary_as_the_correlation_says() {
     let marginal = p.predict(&observations, &[t], 0.5).unwrap();
     let (mean, sigma) = (marginal.joint_mean_at(0), marginal.joint_sigma_at(0));
     let standardised = |joints: JointDraws| {
+        // Drawn as such: representatives would spread wider than the Gaussian.
         let sampling = Sampling {
             samples: 200,
             grid: 1,
             temperature: 1.0,
+            oversample: 1,
             joints,
             ..Sampling::default()
         };
