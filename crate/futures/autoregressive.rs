@@ -83,7 +83,7 @@ pub fn draw_futures_from(
                     order.swap(i, rng.random_range(0..=i));
                 }
             }
-            condition_on_steps(
+            let (contexts, steps) = condition_on_steps(
                 predictor,
                 observed,
                 &order,
@@ -98,27 +98,36 @@ pub fn draw_futures_from(
                     let draw = mean.iter().zip(sigma).zip(eps);
                     (draw.map(|((m, s), e)| m + sampling.temperature * s * e)).collect()
                 },
-            )
+            )?;
+            // A candidate's contexts are rebuilt from its steps if it is kept: K × S of them
+            // would hold K × S copies of every observed frame.
+            Ok(((sampling.oversample == 1).then_some(contexts), steps))
         })
         .collect::<Result<Vec<_>, ModelError>>()?;
     // Where more were drawn than asked for, the representatives of their drawn steps (in
     // time order, each joint in the units the model normalises it by).
     let features: Vec<Vec<f32>> = (candidates.iter())
-        .map(|(_, drawn)| {
-            let mut drawn: Vec<&(f32, Vec<f32>)> = drawn.iter().collect();
-            drawn.sort_by(|a, b| a.0.total_cmp(&b.0));
-            let rows = drawn.into_iter();
-            (rows.flat_map(|(_, joints)| predictor.normalization().normalize(joints))).collect()
+        .map(|(_, steps)| {
+            let mut steps: Vec<&Observations> = steps.iter().collect();
+            steps.sort_by(|a, b| a.times[0].total_cmp(&b.times[0]));
+            let rows = steps.into_iter();
+            (rows.flat_map(|step| predictor.normalization().normalize(&step.joints))).collect()
         })
         .collect();
     let keep = representatives(&features, sampling.samples);
     let mut candidates: Vec<_> = candidates.into_iter().map(Some).collect();
     keep.into_iter()
         .map(|i| {
-            let (contexts, drawn) = candidates[i].take().expect("each candidate kept once");
+            let (contexts, steps) = candidates[i].take().expect("each candidate kept once");
+            let contexts = match contexts {
+                Some(contexts) => contexts,
+                None => with_steps(predictor, observed.clone(), &steps)?,
+            };
             Ok(Future {
                 encoding: predictor.represent(&contexts, blend)?,
-                drawn,
+                drawn: (steps.into_iter())
+                    .map(|step| (step.times[0], step.joints))
+                    .collect(),
             })
         })
         .collect()
@@ -127,9 +136,9 @@ pub fn draw_futures_from(
 /// The observations plus `steps` taken one after another: at each, `joints_at(k, μ, σ)` gives
 /// the joints from the Gaussian predicted there given the contexts before it (a draw, or the
 /// truth when fitting), added to the contexts with the mean frame predicted there. The
-/// contexts and the steps taken. The first step's prediction, given the observations alone, is
-/// the same for every future: `first` keeps it per time, decoded once.
-#[allow(clippy::type_complexity)]
+/// contexts and the steps taken (each an observation: time, mean frame, joints). The first
+/// step's prediction, given the observations alone, is the same for every future: `first`
+/// keeps it per time, decoded once.
 fn condition_on_steps(
     predictor: &Predictor,
     observed: &EncodedContexts,
@@ -137,7 +146,7 @@ fn condition_on_steps(
     blend: f32,
     first: &mut Vec<(f32, SequencePrediction)>,
     mut joints_at: impl FnMut(usize, &[f32], &[f32]) -> Vec<f32>,
-) -> Result<(EncodedContexts, Vec<(f32, Vec<f32>)>), ModelError> {
+) -> Result<(EncodedContexts, Vec<Observations>), ModelError> {
     let image_size = predictor.model().image_size();
     let mut contexts = observed.clone();
     let mut taken = Vec::with_capacity(steps.len());
@@ -152,17 +161,28 @@ fn condition_on_steps(
         if k == 0 && known.is_none() {
             first.push((t, here.clone()));
         }
-        let joints = joints_at(k, here.joint_mean_at(0), here.joint_sigma_at(0));
         let step = Observations {
             image_size,
             frames: here.mean_frame(0),
-            joints: joints.clone(),
+            joints: joints_at(k, here.joint_mean_at(0), here.joint_sigma_at(0)),
             times: vec![t],
         };
-        contexts = contexts.cat(&predictor.encode_contexts(&step)?)?;
-        taken.push((t, joints));
+        contexts = with_steps(predictor, contexts, std::slice::from_ref(&step))?;
+        taken.push(step);
     }
     Ok((contexts, taken))
+}
+
+/// `contexts` with `steps` added one after another, each encoded on its own.
+fn with_steps(
+    predictor: &Predictor,
+    mut contexts: EncodedContexts,
+    steps: &[Observations],
+) -> Result<EncodedContexts, ModelError> {
+    for step in steps {
+        contexts = contexts.cat(&predictor.encode_contexts(step)?)?;
+    }
+    Ok(contexts)
 }
 
 /// The standardised errors, (truth − μ) / σ, of `seq`'s joints at the grid of its `imagined`

@@ -185,6 +185,8 @@ impl Sampling {
     pub const MAX_GRID: usize = 64;
     /// At most this many futures drawn for S representatives.
     pub const MAX_OVERSAMPLE: usize = 16;
+    /// At most this many futures drawn in all (K × S): a bound on one call's memory and time.
+    pub const MAX_DRAWS: usize = 1024;
 
     /// The same sampling drawn from seed + `offset` (each sequence of a set its own draws).
     pub fn reseeded(&self, offset: u64) -> Sampling {
@@ -243,7 +245,8 @@ impl Sampling {
         }
     }
 
-    /// Fails unless 1 ≤ S ≤ [`Sampling::MAX_SAMPLES`], 0 ≤ τ ≤ 4 and 1 ≤ G ≤
+    /// Fails unless 1 ≤ S ≤ [`Sampling::MAX_SAMPLES`], 0 ≤ τ ≤ 4, 1 ≤ K ≤
+    /// [`Sampling::MAX_OVERSAMPLE`], K × S ≤ [`Sampling::MAX_DRAWS`] and 1 ≤ G ≤
     /// [`Sampling::MAX_GRID`].
     pub fn validate(&self) -> Result<(), ModelError> {
         if !(1..=Self::MAX_SAMPLES).contains(&self.samples) {
@@ -272,6 +275,17 @@ impl Sampling {
                     "is {}: expected 1 to {} futures drawn per future kept",
                     self.oversample,
                     Self::MAX_OVERSAMPLE
+                ),
+            ));
+        }
+        if self.samples * self.oversample > Self::MAX_DRAWS {
+            return Err(ModelError::observation(
+                "oversample",
+                format!(
+                    "is {} for {} futures: expected at most {} drawn in all",
+                    self.oversample,
+                    self.samples,
+                    Self::MAX_DRAWS
                 ),
             ));
         }
@@ -318,6 +332,16 @@ mod tests {
             ..Sampling::default()
         };
         assert!(bad.validate().unwrap_err().to_string().contains("grid"));
+        let bad = Sampling {
+            samples: 256,
+            oversample: 8,
+            ..Sampling::default()
+        };
+        assert!(bad
+            .validate()
+            .unwrap_err()
+            .to_string()
+            .contains("at most 1024"));
         Sampling::default().validate().unwrap();
     }
 }
