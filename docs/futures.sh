@@ -2,15 +2,16 @@
 # Re-make the figures of docs/results.md, *Many futures*: sampled futures of the page's default
 # model (assets/models/attn-sim.dmbn) finishing grasps and pushes from their first 30%.
 #
-#   bash docs/futures.sh design [OUT]   # the design set (seeds 1000000-): the sampling settings compared
+#   bash docs/futures.sh design [OUT]   # the design sets (seeds 1000000-, 1400000-): the sampling settings compared
 #   bash docs/futures.sh final  [OUT]   # the three fresh sets (seeds 1100000-, 1200000-, 1300000-): the reported table
 #                                       # (the defaults; the 8 as drawn; drawn with independent joints)
 #   bash docs/futures.sh latent [OUT]   # the latent path against autoregressive sampling, on the design set
 #   bash docs/futures.sh script         # what 8 futures drawn from the simulator's script itself would score
 #
 # Each set is 100 simulated demonstrations per action (`dmbn simulate --sequences 100`). OUT
-# (default out/futures) receives the data, every run's JSON and printed tables. About 10 min
-# per set on a 2-core machine.
+# (default out/futures) receives the data, every run's JSON and printed tables. On a 2-core
+# machine: design about 1.5 h, final about 25 min, latent about 3 h (its training), script
+# seconds.
 set -euo pipefail
 
 what=${1:?usage: bash docs/futures.sh design|final|latent|script [OUT]}
