@@ -2,15 +2,15 @@
 # Re-make the figures of docs/results.md, *Many futures*: sampled futures of the page's default
 # model (assets/models/attn-sim.dmbn) finishing grasps and pushes from their first 30%.
 #
-#   bash docs/futures.sh design [OUT]   # the design sets (seeds 1000000-, 1400000-): the sampling settings compared
-#   bash docs/futures.sh final  [OUT]   # the three fresh sets (seeds 1100000-, 1200000-, 1300000-): the reported table
-#                                       # (the defaults; the 8 as drawn; drawn with independent joints)
+#   bash docs/futures.sh design [OUT]   # the design sets (seeds 1000000-, 1400000-, 1500000-, 1600000-): the sampling settings compared
+#   bash docs/futures.sh final  [OUT]   # the three fresh sets (seeds 1700000-, 1800000-, 1900000-): the reported table
+#                                       # (the defaults; the 8 as drawn; drawn with independent joints; the defaults before)
 #   bash docs/futures.sh latent [OUT]   # the latent path against autoregressive sampling, on the design set
 #   bash docs/futures.sh script         # what 8 futures drawn from the simulator's script itself would score
 #
 # Each set is 100 simulated demonstrations per action (`dmbn simulate --sequences 100`). OUT
 # (default out/futures) receives the data, every run's JSON and printed tables. On a 2-core
-# machine: design about 1.5 h, final about 25 min, latent about 3 h (its training), script
+# machine: design about 2 h, final about 30 min, latent about 3 h (its training), script
 # seconds.
 set -euo pipefail
 
@@ -30,8 +30,10 @@ data() {
 }
 
 # Where a run's futures take the object against the demonstrations (the ceiling's replays):
-# the median push travel and grasp carry (cm from where the object rested), and how far apart
-# a demonstration's futures push (the standard deviation of their travel, mean over pushes).
+# the median push travel and grasp carry (cm from where the object rested), how far apart
+# a demonstration's futures push (the standard deviation of their travel, mean over pushes),
+# and where they are centred: the median travel of a push's futures against the push's own
+# (Pearson's r) and from push to push (its standard deviation).
 spread() {
   [ -f "$1" ] || return 0
   python3 - "$1" "$2" <<'PY'
@@ -45,17 +47,22 @@ travel = defaultdict(list)
 for f in futures:
     if f["action"] == "move":
         travel[f["id"]].append(f["travel_cm"])
+own = {p["id"]: p["travel_cm"] for p in ceiling if p["action"] == "move"}
+ids = sorted(travel)
+centre = [statistics.median(travel[i]) for i in ids]
+r = statistics.correlation(centre, [own[i] for i in ids])
 print(f"{sys.argv[2]}: push travel spread {statistics.mean(map(statistics.pstdev, travel.values())):.2f} cm; "
       f"median push travel {median(futures, 'move'):.1f} cm (demonstrations {median(ceiling, 'move'):.1f}), "
-      f"grasp carry {median(futures, 'grasp'):.1f} cm (demonstrations {median(ceiling, 'grasp'):.1f})")
+      f"grasp carry {median(futures, 'grasp'):.1f} cm (demonstrations {median(ceiling, 'grasp'):.1f}); "
+      f"a push's futures centred: r {r:.2f} with its own travel, {statistics.pstdev(centre):.2f} cm from push to push")
 PY
 }
 
 case $what in
   design)
     # grid order τ joints K (oversample) sets: the settings compared on the design set, those
-    # of the oversampling on a second one too (seeds 1400000-). The defaults: 2 left-to-right
-    # 0.7 correlated 4 (the 8 representatives of 32 drawn).
+    # of the oversampling on a second one too (seeds 1400000-); every correlated draw along
+    # all of R's directions, each future from all the observations.
     for cfg in "1 left-to-right 1 independent 1 1" "2 left-to-right 1 independent 1 1" \
       "3 left-to-right 1 independent 1 1" "4 left-to-right 1 independent 1 1" "8 left-to-right 1 independent 1 1" \
       "4 random 1 independent 1 1" "8 random 1 independent 1 1" "2 left-to-right 0.85 independent 1 1" \
@@ -70,15 +77,31 @@ case $what in
         set=$(data $seed)
         name="$out/design-$seed-g$grid-$order-t$tau-$joints-k$k"
         "$dmbn" imitate --model "$model" --data "$set" --task finish --samples 8 --grid "$grid" \
-          --order "$order" --temperature "$tau" --joints "$joints" --oversample "$k" --json "$name.json" >"$name.txt"
+          --order "$order" --temperature "$tau" --joints "$joints" --oversample "$k" --components all \
+          --bootstrap false --json "$name.json" >"$name.txt"
         grep -A5 "sampled futures each" "$name.txt" | grep '^| [gm]' | sed "s/^/$seed g$grid $order τ$tau $joints K$k /"
+      done
+    done
+    # C (principal directions), bootstrap, τ on four design sets (2 steps left to right,
+    # correlated, K = 4). The defaults: 3 true 0.85.
+    for cfg in "all false 0.7" "3 false 0.85" "3 false 1" "all true 0.7" "3 true 0.85" "3 true 0.7" "3 true 1"; do
+      read -r c boot tau <<<"$cfg"
+      for seed in 1000000 1400000 1500000 1600000; do
+        set=$(data $seed)
+        name="$out/design-$seed-c$c-boot$boot-t$tau"
+        "$dmbn" imitate --model "$model" --data "$set" --task finish --samples 8 --components "$c" \
+          --bootstrap "$boot" --temperature "$tau" --json "$name.json" >"$name.txt"
+        grep -A5 "sampled futures each" "$name.txt" | grep '^| [gm]' | sed "s/^/$seed C$c bootstrap $boot τ$tau /"
       done
     done
     ;;
   final)
-    for seed in 1100000 1200000 1300000; do
+    for seed in 1700000 1800000 1900000; do
       set=$(data $seed)
       "$dmbn" imitate --model "$model" --data "$set" --task finish --samples 8 --json "$out/finish-$seed.json" | tee "$out/finish-$seed.txt"
+      # The defaults before (every direction of R, every future from all the observations, τ 0.7).
+      "$dmbn" imitate --model "$model" --data "$set" --task finish --samples 8 --components all --bootstrap false \
+        --temperature 0.7 --json "$out/finish-before-$seed.json" | tee "$out/finish-before-$seed.txt"
       # The 8 as drawn (no representatives), and drawn with independent joints.
       "$dmbn" imitate --model "$model" --data "$set" --task finish --samples 8 --oversample 1 \
         --json "$out/finish-drawn-$seed.json" | tee "$out/finish-drawn-$seed.txt"
@@ -87,8 +110,9 @@ case $what in
       "$dmbn" imitate --model "$model" --data "$set" --task frames --json "$out/frames-$seed.json" | tee "$out/frames-$seed.txt"
       "$dmbn" score --model "$model" --data "$set" --scenario extrap --samples 8 --json "$out/score-$seed.json" | tee "$out/score-$seed.txt"
     done
-    for seed in 1100000 1200000 1300000; do
+    for seed in 1700000 1800000 1900000; do
       spread "$out/finish-$seed.json" "set $seed, the defaults"
+      spread "$out/finish-before-$seed.json" "set $seed, the defaults before"
       spread "$out/finish-drawn-$seed.json" "set $seed, as drawn"
       spread "$out/finish-independent-$seed.json" "set $seed, as drawn, independent joints"
     done
@@ -134,10 +158,11 @@ case $what in
     for run in kl003-latent-1 free3-latent-1 free3-latent-2.5 free3-ar-0.7 free8-latent-1 free8-latent-2.5 long8-latent-1 long8-latent-2.5 scratch-latent-1 scratch-latent-2; do
       IFS=- read -r name method tau <<<"$run"
       "$dmbn" imitate --model "$out/$name/model.dmbn" --data "$set" --task finish --samples 8 \
-        --method "$method" --temperature "$tau" --json "$out/latent-$run.json" >"$out/latent-$run.txt"
+        --method "$method" --temperature "$tau" --bootstrap false --json "$out/latent-$run.json" >"$out/latent-$run.txt"
       grep -A5 "sampled futures each" "$out/latent-$run.txt" | grep '^| [gm]' | sed "s/^/$run /"
       spread "$out/latent-$run.json" "$run"
     done
+    spread "$out/design-1000000-c3-boottrue-t0.85.json" "attn-sim, the defaults (bash docs/futures.sh design)"
     for run in independent-k1 correlated-k1 correlated-k4; do
       spread "$out/design-1000000-g2-left-to-right-t0.7-$run.json" "attn-sim-ar-0.7-$run (bash docs/futures.sh design)"
     done

@@ -44,6 +44,24 @@ fn roughness(joints: &Joints, from: usize) -> f64 {
     sum / n as f64
 }
 
+/// A push of `seed` to finish from its first 30%: the demonstration, its observed steps, their
+/// observations and the times of the steps to imagine.
+fn push_to_finish(seed: u64) -> (dmbn::data::Sequence, Vec<usize>, Observations, Vec<f32>) {
+    let demo = episode(Action::Move, seed, 64).unwrap();
+    let steps = Task::Finish.steps(demo.len(), 5).unwrap();
+    let observations = Observations::from_sequence(&demo, &steps.observed).unwrap();
+    let future = demo.times()[steps.predicted_from..].to_vec();
+    (demo, steps.observed, observations, future)
+}
+
+/// Each future's drawn steps' joints, in the order drawn, one row per future.
+fn drawn(p: &Predictor, o: &Observations, future: &[f32], s: &Sampling) -> Vec<Vec<f32>> {
+    let futures = draw_futures(p, o, future, 0.5, s).unwrap();
+    (futures.iter())
+        .map(|f| f.drawn.iter().flat_map(|(_, j)| j.clone()).collect())
+        .collect()
+}
+
 #[test]
 fn sampled_futures_are_smooth_spread_and_deterministic() {
     let p = predictor();
@@ -148,10 +166,8 @@ fn sampled_futures_are_smooth_spread_and_deterministic() {
 #[test]
 fn oversampled_futures_are_representatives_of_more_draws() {
     let p = predictor();
-    let demo = episode(Action::Move, 434_343, 64).unwrap();
-    let steps = Task::Finish.steps(demo.len(), 5).unwrap();
-    let observations = Observations::from_sequence(&demo, &steps.observed).unwrap();
-    let future = &demo.times()[steps.predicted_from..];
+    let (_, _, observations, future) = push_to_finish(434_343);
+    let future = &future[..];
     let sampling = Sampling {
         samples: 6,
         oversample: 1,
@@ -165,13 +181,10 @@ fn oversampled_futures_are_representatives_of_more_draws() {
         samples: 24,
         ..sampling
     };
-    let drawn = |s: &Sampling| -> Vec<Vec<f32>> {
-        let futures = draw_futures(&p, &observations, future, 0.5, s).unwrap();
-        (futures.iter())
-            .map(|f| f.drawn.iter().flat_map(|(_, j)| j.clone()).collect())
-            .collect()
-    };
-    let (kept, all) = (drawn(&kept), drawn(&all));
+    let (kept, all) = (
+        drawn(&p, &observations, future, &kept),
+        drawn(&p, &observations, future, &all),
+    );
     assert_eq!(kept.len(), 6);
     for (i, k) in kept.iter().enumerate() {
         assert!(all.contains(k), "kept future {i} was not drawn");
@@ -199,6 +212,41 @@ fn oversampled_futures_are_representatives_of_more_draws() {
     };
     let err = draw_futures(&p, &observations, future, 0.5, &bad).unwrap_err();
     assert!(err.to_string().contains("oversample"), "{err}");
+}
+
+#[test]
+fn bootstrapped_futures_see_resampled_observations_and_keep_the_latest() {
+    let p = predictor();
+    let (demo, observed, observations, future) = push_to_finish(454_545);
+    let sampling = Sampling {
+        samples: 6,
+        oversample: 1,
+        ..Sampling::default()
+    };
+    let draw = |s: &Sampling, o: &Observations| drawn(&p, o, &future, s);
+    let fixed = Sampling {
+        bootstrap: false,
+        ..sampling
+    };
+    let (booted, all) = (draw(&sampling, &observations), draw(&fixed, &observations));
+    assert_ne!(booted, all, "bootstrap resamples changed no future");
+    assert_eq!(booted, draw(&sampling, &observations), "not deterministic");
+    // A future's first drawn step, given a resample, differs from the one given all the
+    // observations only by what the resample left out: with one observation there is nothing
+    // to resample, and the futures are those drawn from all of it.
+    let latest = Observations::from_sequence(&demo, &observed[observed.len() - 1..]).unwrap();
+    assert_eq!(draw(&sampling, &latest), draw(&fixed, &latest));
+    // Resamples that kept an older observation in the latest's place would restart the arm
+    // from an older pose: every future's first drawn step stays near the one drawn from all.
+    let first = |x: &[Vec<f32>]| x.iter().map(|f| f[0]).collect::<Vec<f32>>();
+    let (b, a) = (first(&booted), first(&all));
+    let spread = |v: &[f32]| {
+        v.iter().cloned().fold(f32::MIN, f32::max) - v.iter().cloned().fold(f32::MAX, f32::min)
+    };
+    assert!(
+        spread(&b) < 4.0 * spread(&a) + 0.05,
+        "booted {b:?} all {a:?}"
+    );
 }
 
 #[test]
@@ -289,6 +337,8 @@ fn dmbn_sample_writes_the_futures_and_refuses_bad_settings() {
         (&["--samples", "0"][..], "samples"),
         (&["--grid", "0"][..], "grid"),
         (&["--order", "backwards"][..], "left-to-right or random"),
+        (&["--components", "0"][..], "1 or more, or all"),
+        (&["--bootstrap", "maybe"][..], "--bootstrap"),
     ] {
         let o = run(extra, &bad);
         let err = String::from_utf8_lossy(&o.stderr);

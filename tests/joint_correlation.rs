@@ -27,22 +27,29 @@ fn pearson(a: &[f64], b: &[f64]) -> f64 {
     cov / (va * vb).sqrt()
 }
 
-#[test]
-fn a_drawn_step_s_joints_vary_as_the_correlation_says() {
+/// The page's default model with a correlation of its own: 1 on the diagonal, `pairs`
+/// (i, j, r) off it, 0 elsewhere.
+fn correlated(pairs: &[(usize, usize, f32)]) -> Predictor {
     let d = predictor().joint_count();
-    // Joint values 0 and 1 together (0.9), 2 against 3 (-0.8), the rest on their own.
     let mut r = vec![0.0f32; d * d];
     for i in 0..d {
         r[i * d + i] = 1.0;
     }
-    for (i, j, v) in [(0, 1, 0.9f32), (2, 3, -0.8)] {
+    for &(i, j, v) in pairs {
         r[i * d + j] = v;
         r[j * d + i] = v;
     }
     let correlation = JointCorrelation::new("r", r, d).unwrap();
-    let p = predictor()
+    predictor()
         .with_joint_correlation(Some(correlation))
-        .unwrap();
+        .unwrap()
+}
+
+#[test]
+fn a_drawn_step_s_joints_vary_as_the_correlation_says() {
+    let d = predictor().joint_count();
+    // Joint values 0 and 1 together (0.9), 2 against 3 (-0.8), the rest on their own.
+    let p = correlated(&[(0, 1, 0.9), (2, 3, -0.8)]);
     let demo = episode(Action::Move, 626_262, 64).unwrap();
     let steps = Task::Finish.steps(demo.len(), 5).unwrap();
     let observations = Observations::from_sequence(&demo, &steps.observed).unwrap();
@@ -54,12 +61,16 @@ fn a_drawn_step_s_joints_vary_as_the_correlation_says() {
     let (mean, sigma) = (marginal.joint_mean_at(0), marginal.joint_sigma_at(0));
     let standardised = |joints: JointDraws| {
         // Drawn as such: representatives would spread wider than the Gaussian.
+        // Every direction of R, every future from all the observations: each drawn step
+        // from the one Gaussian.
         let sampling = Sampling {
             samples: 200,
             grid: 1,
             temperature: 1.0,
             oversample: 1,
             joints,
+            components: None,
+            bootstrap: false,
             ..Sampling::default()
         };
         let futures = draw_futures(&p, &observations, future, 0.5, &sampling).unwrap();
@@ -99,6 +110,58 @@ fn a_drawn_step_s_joints_vary_as_the_correlation_says() {
     let wrong = JointCorrelation::new("r", vec![1.0, 0.0, 0.0, 1.0], 2).unwrap();
     let err = predictor().with_joint_correlation(Some(wrong)).unwrap_err();
     assert!(err.to_string().contains("2 × 2"), "{err}");
+}
+
+#[test]
+fn drawn_along_one_principal_direction_only_the_leading_joints_move() {
+    let d = predictor().joint_count();
+    // Joint values 0 and 1 together (0.9: R's leading direction, λ 1.9), 2 against 3 (-0.5).
+    let p = correlated(&[(0, 1, 0.9), (2, 3, -0.5)]);
+    let demo = episode(Action::Grasp, 515_151, 64).unwrap();
+    let steps = Task::Finish.steps(demo.len(), 5).unwrap();
+    let observations = Observations::from_sequence(&demo, &steps.observed).unwrap();
+    let future = &demo.times()[steps.predicted_from..];
+    let t = *future.last().unwrap();
+    let marginal = p.predict(&observations, &[t], 0.5).unwrap();
+    let (mean, sigma) = (marginal.joint_mean_at(0), marginal.joint_sigma_at(0));
+    let draw = |components| {
+        let sampling = Sampling {
+            samples: 20,
+            grid: 1,
+            temperature: 1.0,
+            oversample: 1,
+            components,
+            bootstrap: false,
+            ..Sampling::default()
+        };
+        let futures = draw_futures(&p, &observations, future, 0.5, &sampling).unwrap();
+        (futures.iter())
+            .map(|f| {
+                let x = &f.drawn[0].1;
+                (0..d).map(|j| (x[j] - mean[j]) / sigma[j]).collect()
+            })
+            .collect::<Vec<Vec<f32>>>()
+    };
+    let (one, all) = (draw(Some(1)), draw(None));
+    for (z, z_all) in one.iter().zip(&all) {
+        // Joints 0 and 1 move as one, the rest stay at their means.
+        assert!((z[0] - z[1]).abs() < 1e-3 * (1.0 + z[0].abs()), "{z:?}");
+        assert!(z[2..].iter().all(|v| v.abs() < 1e-4), "{z:?}");
+        // The same draw along R's every direction: the leading one plus the others.
+        assert!(z_all[2..].iter().any(|v| v.abs() > 1e-3), "{z_all:?}");
+    }
+    // Spread along that direction: √1.9 · ε, so a standard deviation near 1.4.
+    let var = one.iter().map(|z| (z[0] * z[0]) as f64).sum::<f64>() / one.len() as f64;
+    assert!(
+        (0.8..3.8).contains(&var),
+        "variance along the leading direction {var}"
+    );
+    let bad = Sampling {
+        components: Some(0),
+        ..Sampling::default()
+    };
+    let err = draw_futures(&p, &observations, future, 0.5, &bad).unwrap_err();
+    assert!(err.to_string().contains("components"), "{err}");
 }
 
 #[test]

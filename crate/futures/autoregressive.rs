@@ -73,26 +73,41 @@ pub fn draw_futures_from(
         (_, correlation) => correlation,
     };
     let grid = grid(target_times, sampling.grid);
+    let components = sampling.components.unwrap_or(usize::MAX);
     let mut first = Vec::new();
     let candidates = (0..sampling.samples * sampling.oversample)
         .map(|s| {
             let mut rng = future_rng(sampling, s);
+            let resample = sampling
+                .bootstrap
+                .then(|| bootstrap(&observed.observed_times(), observed.len(), &mut rng))
+                .flatten();
             let mut order = grid.clone();
             if sampling.order == Order::Random {
                 for i in (1..order.len()).rev() {
                     order.swap(i, rng.random_range(0..=i));
                 }
             }
+            // The first step's prediction is shared only by futures that see the same
+            // observations.
+            let (resampled, mut own_first);
+            let (observed, first) = match &resample {
+                Some(indices) => {
+                    (resampled, own_first) = (observed.select(indices)?, Vec::new());
+                    (&resampled, &mut own_first)
+                }
+                None => (observed, &mut first),
+            };
             let (contexts, steps) = condition_on_steps(
                 predictor,
                 observed,
                 &order,
                 blend,
-                &mut first,
+                first,
                 |_, mean, sigma| {
                     let eps: Vec<f32> = mean.iter().map(|_| standard_normal(&mut rng)).collect();
                     let eps = match correlation {
-                        Some(r) => r.correlate(&eps),
+                        Some(r) => r.correlate(&eps, components),
                         None => eps,
                     };
                     let draw = mean.iter().zip(sigma).zip(eps);
@@ -101,14 +116,19 @@ pub fn draw_futures_from(
             )?;
             // A candidate's contexts are rebuilt from its steps if it is kept: K × S of them
             // would hold K × S copies of every observed frame.
-            Ok(((sampling.oversample == 1).then_some(contexts), steps))
+            let contexts = (sampling.oversample == 1).then_some(contexts);
+            Ok(Candidate {
+                contexts,
+                resample,
+                steps,
+            })
         })
         .collect::<Result<Vec<_>, ModelError>>()?;
     // Where more were drawn than asked for, the representatives of their drawn steps (in
     // time order, each joint in the units the model normalises it by).
     let features: Vec<Vec<f32>> = (candidates.iter())
-        .map(|(_, steps)| {
-            let mut steps: Vec<&Observations> = steps.iter().collect();
+        .map(|candidate| {
+            let mut steps: Vec<&Observations> = candidate.steps.iter().collect();
             steps.sort_by(|a, b| a.times[0].total_cmp(&b.times[0]));
             let rows = steps.into_iter();
             (rows.flat_map(|step| predictor.normalization().normalize(&step.joints))).collect()
@@ -118,19 +138,46 @@ pub fn draw_futures_from(
     let mut candidates: Vec<_> = candidates.into_iter().map(Some).collect();
     keep.into_iter()
         .map(|i| {
-            let (contexts, steps) = candidates[i].take().expect("each candidate kept once");
-            let contexts = match contexts {
-                Some(contexts) => contexts,
-                None => with_steps(predictor, observed.clone(), &steps)?,
+            let candidate = candidates[i].take().expect("each candidate kept once");
+            let contexts = match (candidate.contexts, &candidate.resample) {
+                (Some(contexts), _) => contexts,
+                (None, None) => with_steps(predictor, observed.clone(), &candidate.steps)?,
+                (None, Some(indices)) => {
+                    with_steps(predictor, observed.select(indices)?, &candidate.steps)?
+                }
             };
             Ok(Future {
                 encoding: predictor.represent(&contexts, blend)?,
-                drawn: (steps.into_iter())
+                drawn: (candidate.steps.into_iter())
                     .map(|step| (step.times[0], step.joints))
                     .collect(),
             })
         })
         .collect()
+}
+
+/// A future drawn, before the representatives are chosen.
+struct Candidate {
+    /// What the decoders condition on (kept only when every drawn future is kept).
+    contexts: Option<EncodedContexts>,
+    /// The observations it conditions on, by index, where it sees a bootstrap resample.
+    resample: Option<Vec<usize>>,
+    /// Its drawn steps, in the order drawn.
+    steps: Vec<Observations>,
+}
+
+/// A bootstrap resample of the observations at `times`: as many indices, drawn with
+/// replacement, the last of them the latest observation (where the arm is now: a future that
+/// forgot it would restart from an older pose). `None` with fewer than 2 observations, or
+/// where `n` contexts are not the observations at `times` (a padded batch).
+fn bootstrap(times: &[f32], n: usize, rng: &mut Pcg64) -> Option<Vec<usize>> {
+    if n < 2 || times.len() != n {
+        return None;
+    }
+    let latest = (0..n).max_by(|&a, &b| times[a].total_cmp(&times[b]))?;
+    let mut indices: Vec<usize> = (0..n).map(|_| rng.random_range(0..n)).collect();
+    indices[n - 1] = latest;
+    Some(indices)
 }
 
 /// The observations plus `steps` taken one after another: at each, `joints_at(k, μ, σ)` gives
@@ -390,6 +437,23 @@ mod tests {
         assert_eq!(grid(&targets, 4), vec![0.25, 0.5, 0.75, 1.0]);
         assert_eq!(grid(&targets[..3], 4), targets[..3].to_vec());
         assert_eq!(grid(&targets, 1), vec![1.0]);
+    }
+
+    #[test]
+    fn a_bootstrap_resample_keeps_the_latest_observation_last() {
+        let mut rng = Pcg64::seed_from_u64(3);
+        let times = [0.3, 0.0, 0.15];
+        let mut seen = [false; 3];
+        for _ in 0..50 {
+            let indices = bootstrap(&times, 3, &mut rng).unwrap();
+            assert_eq!((indices.len(), indices[2]), (3, 0), "{indices:?}");
+            for &i in &indices[..2] {
+                seen[i] = true;
+            }
+        }
+        assert_eq!(seen, [true; 3], "some observation never drawn");
+        assert_eq!(bootstrap(&[0.5], 1, &mut rng), None);
+        assert_eq!(bootstrap(&times, 4, &mut rng), None);
     }
 
     #[test]

@@ -148,6 +148,15 @@ pub struct Sampling {
     pub order: Order,
     /// A drawn step's joints: correlated as the model file says, or each on its own.
     pub joints: JointDraws,
+    /// C: correlated joints vary along the C leading principal directions of the file's
+    /// correlation only (`None`: all of them; [`crate::model::JointCorrelation::correlate`]).
+    pub components: Option<usize>,
+    /// Each autoregressive future conditions on its own bootstrap resample of the
+    /// observations (drawn with replacement, the latest always kept): the network's guess at
+    /// what the observations leave open shifts with the glimpses it is given, and a future
+    /// per resample spreads over those guesses (Lee et al., "Bootstrapping Neural Processes",
+    /// NeurIPS 2020).
+    pub bootstrap: bool,
     /// K: autoregressive futures drawn K × S, of which the S representatives are kept
     /// ([`super::representatives`]); 1: the S drawn. Latent futures are drawn as such.
     pub oversample: usize,
@@ -161,8 +170,10 @@ pub struct Sampling {
 /// The defaults were chosen on a design set no figure is reported on (seeds 1000000-1000099,
 /// the page's default model finishing 100 grasps and 100 pushes from their first 30%; docs/
 /// results.md, *Many futures*): 2 steps drawn (1, 3, 4 and 8 covered fewer demonstrations),
-/// left to right (random orders covered fewer), τ 0.7 (1 covered fewer grasps, 0.5 fewer
-/// pushes).
+/// left to right (random orders covered fewer), correlated joints along their 3 leading
+/// principal directions with τ 0.85, each future from a bootstrap resample of the
+/// observations, the representatives of 4 × S (docs/results.md has the figures, from four
+/// design sets).
 impl Default for Sampling {
     fn default() -> Self {
         Sampling {
@@ -171,8 +182,10 @@ impl Default for Sampling {
             grid: 2,
             order: Order::LeftToRight,
             joints: JointDraws::Auto,
+            components: Some(3),
+            bootstrap: true,
             oversample: 4,
-            temperature: 0.7,
+            temperature: 0.85,
             seed: 0,
         }
     }
@@ -205,6 +218,13 @@ impl Sampling {
             JointDraws::Independent => "joints independent",
         };
         let mut ar = format!("{} steps drawn, {}, {joints}", self.grid, self.order);
+        if let (Some(c), JointDraws::Auto | JointDraws::Correlated) = (self.components, self.joints)
+        {
+            ar += &format!(" along {c} principal directions");
+        }
+        if self.bootstrap {
+            ar += ", each from a bootstrap resample of the observations";
+        }
         if self.oversample > 1 {
             ar += &format!(", the representatives of {} × S", self.oversample);
         }
@@ -245,7 +265,7 @@ impl Sampling {
         }
     }
 
-    /// Fails unless 1 ≤ S ≤ [`Sampling::MAX_SAMPLES`], 0 ≤ τ ≤ 4, 1 ≤ K ≤
+    /// Fails unless 1 ≤ S ≤ [`Sampling::MAX_SAMPLES`], 0 ≤ τ ≤ 4, C ≥ 1, 1 ≤ K ≤
     /// [`Sampling::MAX_OVERSAMPLE`], K × S ≤ [`Sampling::MAX_DRAWS`] and 1 ≤ G ≤
     /// [`Sampling::MAX_GRID`].
     pub fn validate(&self) -> Result<(), ModelError> {
@@ -289,6 +309,12 @@ impl Sampling {
                 ),
             ));
         }
+        if self.components == Some(0) {
+            return Err(ModelError::observation(
+                "components",
+                "is 0: expected 1 or more principal directions of the joints, or all",
+            ));
+        }
         if !(1..=Self::MAX_GRID).contains(&self.grid) {
             return Err(ModelError::observation(
                 "grid",
@@ -327,6 +353,15 @@ mod tests {
             ..Sampling::default()
         };
         assert!(bad.validate().unwrap_err().to_string().contains("samples"));
+        let bad = Sampling {
+            components: Some(0),
+            ..Sampling::default()
+        };
+        assert!(bad
+            .validate()
+            .unwrap_err()
+            .to_string()
+            .contains("components"));
         let bad = Sampling {
             grid: 65,
             ..Sampling::default()

@@ -7,14 +7,18 @@ use super::ModelError;
 /// wanders in directions no demonstration takes. Drawn as ε ~ N(0, R) (L ε with L Lᵀ = R, a
 /// Gaussian copula on the network's marginals: Markou et al., "Practical Conditional Neural
 /// Processes via Tractable Dependent Predictions", ICLR 2022), each joint keeps its predicted
-/// mean and σ.
+/// mean and σ. A draw may keep only R's C leading principal directions
+/// ([`JointCorrelation::correlate`]): where what is left open is a push's length or a carry's
+/// spot, the errors' variation lies mostly along a few directions, and the rest is the
+/// network's noise, which spoils a performed action.
 #[derive(Debug, Clone, PartialEq)]
 pub struct JointCorrelation {
     joints: usize,
     /// R, row-major `[D, D]`.
     values: Vec<f32>,
-    /// L, its lower Cholesky factor, row-major `[D, D]`.
-    cholesky: Vec<f32>,
+    /// R's principal factor, row-major `[D, D]`: column c is √λ_c v_c, the c-th largest
+    /// eigenvalue and its unit eigenvector (so that the factor times its transpose is R).
+    principal: Vec<f32>,
 }
 
 impl JointCorrelation {
@@ -53,12 +57,22 @@ impl JointCorrelation {
                 )));
             }
         }
-        let cholesky = cholesky(&values, joints)
-            .ok_or_else(|| bad("is not positive definite: expected a correlation matrix".into()))?;
+        let eigen = symmetric_eigen(&values, joints);
+        if eigen.last().is_some_and(|(lambda, _)| *lambda <= 1e-9) {
+            return Err(bad(
+                "is not positive definite: expected a correlation matrix".into(),
+            ));
+        }
+        let mut principal = vec![0.0f32; joints * joints];
+        for (c, (lambda, vector)) in eigen.iter().enumerate() {
+            for (i, v) in vector.iter().enumerate() {
+                principal[i * joints + c] = (lambda.sqrt() * v) as f32;
+            }
+        }
         Ok(JointCorrelation {
             joints,
             values,
-            cholesky,
+            principal,
         })
     }
 
@@ -110,34 +124,69 @@ impl JointCorrelation {
         &self.values
     }
 
-    /// L ε: D independent standard normal draws made to vary together as R says.
-    pub fn correlate(&self, eps: &[f32]) -> Vec<f32> {
+    /// D independent standard normal draws `eps` made to vary together as R says, along its
+    /// `components` leading principal directions (Σ_c √λ_c v_c ε_c over c < C; all D: the
+    /// draws' correlation is R; fewer: the rest of the variation is left out). `eps[c]` drives
+    /// direction c, so the same draws with fewer components are the same futures, pruned.
+    pub fn correlate(&self, eps: &[f32], components: usize) -> Vec<f32> {
         let d = self.joints;
+        let kept = components.min(d);
         (0..d)
-            .map(|i| (0..=i).map(|j| self.cholesky[i * d + j] * eps[j]).sum())
+            .map(|i| (0..kept).map(|c| self.principal[i * d + c] * eps[c]).sum())
             .collect()
     }
 }
 
-/// The lower Cholesky factor of the `d` × `d` matrix `a` (in f64, stored as f32: the same
-/// bits natively and in wasm); `None` unless `a` is positive definite.
-fn cholesky(a: &[f32], d: usize) -> Option<Vec<f32>> {
-    let mut l = vec![0.0f64; d * d];
-    for i in 0..d {
-        for j in 0..=i {
-            let s: f64 = (0..j).map(|k| l[i * d + k] * l[j * d + k]).sum();
-            let v = a[i * d + j] as f64 - s;
-            if i == j {
-                if v <= 1e-9 {
-                    return None;
+/// The eigenvalues and unit eigenvectors of the symmetric `d` × `d` matrix `a`, largest first
+/// (cyclic Jacobi rotations in f64, with + − × ÷ and √ alone: the same bits natively and in
+/// wasm).
+fn symmetric_eigen(a: &[f32], d: usize) -> Vec<(f64, Vec<f64>)> {
+    let mut m: Vec<f64> = a.iter().map(|&x| x as f64).collect();
+    let mut v: Vec<f64> = (0..d * d)
+        .map(|k| if k / d == k % d { 1.0 } else { 0.0 })
+        .collect();
+    for _sweep in 0..100 {
+        let off: f64 = (0..d * d)
+            .filter(|k| k / d != k % d)
+            .map(|k| m[k] * m[k])
+            .sum();
+        if off < 1e-30 {
+            break;
+        }
+        for p in 0..d {
+            for q in p + 1..d {
+                let apq = m[p * d + q];
+                if apq == 0.0 {
+                    continue;
                 }
-                l[i * d + i] = v.sqrt();
-            } else {
-                l[i * d + j] = v / l[j * d + j];
+                // The rotation J that zeroes m[p][q]: m ← Jᵀ m J, v ← v J.
+                let theta = (m[q * d + q] - m[p * d + p]) / (2.0 * apq);
+                let t = theta.signum() / (theta.abs() + (theta * theta + 1.0).sqrt());
+                let c = 1.0 / (t * t + 1.0).sqrt();
+                let s = t * c;
+                for k in 0..d {
+                    let (kp, kq) = (m[k * d + p], m[k * d + q]);
+                    m[k * d + p] = c * kp - s * kq;
+                    m[k * d + q] = s * kp + c * kq;
+                }
+                for k in 0..d {
+                    let (pk, qk) = (m[p * d + k], m[q * d + k]);
+                    m[p * d + k] = c * pk - s * qk;
+                    m[q * d + k] = s * pk + c * qk;
+                }
+                for k in 0..d {
+                    let (kp, kq) = (v[k * d + p], v[k * d + q]);
+                    v[k * d + p] = c * kp - s * kq;
+                    v[k * d + q] = s * kp + c * kq;
+                }
             }
         }
     }
-    Some(l.into_iter().map(|v| v as f32).collect())
+    let mut pairs: Vec<(f64, Vec<f64>)> = (0..d)
+        .map(|c| (m[c * d + c], (0..d).map(|i| v[i * d + c]).collect()))
+        .collect();
+    pairs.sort_by(|a, b| b.0.total_cmp(&a.0));
+    pairs
 }
 
 #[cfg(test)]
@@ -166,17 +215,33 @@ mod tests {
         assert!(v[1] > 0.9 && v[1] < 0.99, "{v:?}");
         assert!(v[2] < -0.98, "{v:?}");
         assert_eq!((v[3], v[15]), (0.0, 1.0));
-        // L Lᵀ = R.
-        let l = &r.cholesky;
+        // The principal factor times its transpose is R.
+        let l = &r.principal;
         for i in 0..4 {
             for j in 0..4 {
                 let llt: f32 = (0..4).map(|k| l[i * 4 + k] * l[j * 4 + k]).sum();
                 assert!((llt - v[i * 4 + j]).abs() < 1e-5, "{i} {j}");
             }
         }
-        // Independent draws correlated: the first and the third now go against each other.
-        let x = r.correlate(&[1.0, 0.0, 0.0, 0.0]);
-        assert!(x[0] > 0.99 && x[2] < -0.98, "{x:?}");
+        // The leading direction moves the first three together (the third against), the
+        // fourth not at all: the first and the third go against each other.
+        let x = r.correlate(&[1.0, 0.0, 0.0, 0.0], 4);
+        assert!(x[0] * x[2] < 0.0 && x[3].abs() < 1e-6, "{x:?}");
+        assert!((x[0] + x[2]).abs() < 0.05 * x[0].abs(), "{x:?}");
+        // One component: whatever the other draws, only the leading direction moves.
+        assert_eq!(r.correlate(&[1.0, 5.0, -3.0, 2.0], 1), x);
+    }
+
+    #[test]
+    fn eigenpairs_come_largest_first_and_rebuild_the_matrix() {
+        let eigen = symmetric_eigen(&[2.0, 1.0, 0.0, 1.0, 2.0, 0.0, 0.0, 0.0, 0.5], 3);
+        let lambdas: Vec<f64> = eigen.iter().map(|(l, _)| *l).collect();
+        for (got, want) in lambdas.iter().zip([3.0, 1.0, 0.5]) {
+            assert!((got - want).abs() < 1e-12, "{lambdas:?}");
+        }
+        let (_, top) = &eigen[0];
+        assert!((top[0].abs() - 0.5f64.sqrt()).abs() < 1e-12 && top[0] * top[1] > 0.0);
+        assert!(top[2].abs() < 1e-12);
     }
 
     #[test]

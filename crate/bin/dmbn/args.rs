@@ -168,6 +168,14 @@ pub struct SamplingArgs {
     /// by `dmbn calibrate`), `independent`, or `auto` (correlated where the file holds one).
     #[arg(long, default_value_t = Sampling::default().joints)]
     pub joints: JointDraws,
+    /// C: correlated joints vary along the C leading principal directions of the file's joint
+    /// correlation only, or along `all` of them.
+    #[arg(long, default_value = "3", value_parser = parse_components)]
+    pub components: std::option::Option<usize>,
+    /// Each autoregressive future conditions on its own bootstrap resample of the
+    /// observations (the latest always kept), or on all of them (`false`).
+    #[arg(long, default_value_t = Sampling::default().bootstrap, action = clap::ArgAction::Set)]
+    pub bootstrap: bool,
     /// K: draw K × S autoregressive futures and keep their S representatives (k-means over
     /// the drawn steps), so that the S spread over what may happen; 1: the S drawn.
     #[arg(long, default_value_t = Sampling::default().oversample)]
@@ -190,9 +198,24 @@ impl SamplingArgs {
             grid: self.grid,
             order: self.order,
             joints: self.joints,
+            components: self.components,
+            bootstrap: self.bootstrap,
             oversample: self.oversample,
             temperature: self.temperature,
             seed: self.seed,
         }
+    }
+}
+
+/// `--components`: a count of principal directions, or `all`.
+fn parse_components(s: &str) -> Result<Option<usize>, String> {
+    match s {
+        "all" => Ok(None),
+        _ => match s.parse::<usize>() {
+            Ok(c) if c >= 1 => Ok(Some(c)),
+            _ => Err(format!(
+                "{s:?} is not a count of principal directions: expected 1 or more, or all"
+            )),
+        },
     }
 }
