@@ -168,15 +168,18 @@ struct Candidate {
 
 /// A bootstrap resample of the observations at `times`: as many indices, drawn with
 /// replacement, the last of them the latest observation (where the arm is now: a future that
-/// forgot it would restart from an older pose). `None` with fewer than 2 observations, or
-/// where `n` contexts are not the observations at `times` (a padded batch).
+/// forgot it would restart from an older pose). Drawn in time order, so that the same
+/// observations encoded in another order (the page's workers) give the same resample.
+/// `None` with fewer than 2 observations, or where `n` contexts are not the observations at
+/// `times` (a padded batch).
 fn bootstrap(times: &[f32], n: usize, rng: &mut Pcg64) -> Option<Vec<usize>> {
     if n < 2 || times.len() != n {
         return None;
     }
-    let latest = (0..n).max_by(|&a, &b| times[a].total_cmp(&times[b]))?;
-    let mut indices: Vec<usize> = (0..n).map(|_| rng.random_range(0..n)).collect();
-    indices[n - 1] = latest;
+    let mut by_time: Vec<usize> = (0..n).collect();
+    by_time.sort_by(|&a, &b| times[a].total_cmp(&times[b]));
+    let mut indices: Vec<usize> = (0..n).map(|_| by_time[rng.random_range(0..n)]).collect();
+    indices[n - 1] = by_time[n - 1];
     Some(indices)
 }
 
@@ -452,6 +455,12 @@ mod tests {
             }
         }
         assert_eq!(seen, [true; 3], "some observation never drawn");
+        // The same observations in another order: the same observations drawn.
+        let (mut a, mut b) = (Pcg64::seed_from_u64(9), Pcg64::seed_from_u64(9));
+        let sorted = bootstrap(&[0.0, 0.15, 0.3], 3, &mut a).unwrap();
+        let shuffled = bootstrap(&times, 3, &mut b).unwrap();
+        let at = |t: &[f32], i: &[usize]| i.iter().map(|&k| t[k]).collect::<Vec<f32>>();
+        assert_eq!(at(&[0.0, 0.15, 0.3], &sorted), at(&times, &shuffled));
         assert_eq!(bootstrap(&[0.5], 1, &mut rng), None);
         assert_eq!(bootstrap(&times, 4, &mut rng), None);
     }

@@ -210,7 +210,7 @@ impl Sampling {
     }
 
     /// How the futures are drawn, in words (the reports' headings): "latent path, τ 1, seed
-    /// 0", "2 steps drawn, left-to-right, τ 0.7, seed 0", or for `auto` both.
+    /// 0", "2 steps drawn, left-to-right, τ 0.85, seed 0", or for `auto` both.
     pub fn describe(&self) -> String {
         let joints = match self.joints {
             JointDraws::Auto => "joints correlated where the file says",
