@@ -45,41 +45,72 @@ fn correlated(pairs: &[(usize, usize, f32)]) -> Predictor {
         .unwrap()
 }
 
+/// A demonstration finished from its first 30% with one drawn step, its last: the drawn
+/// step's Gaussian is the prediction there given the observations alone.
+struct LastStep {
+    observations: Observations,
+    future: Vec<f32>,
+    mean: Vec<f32>,
+    sigma: Vec<f32>,
+}
+
+impl LastStep {
+    fn of(p: &Predictor, action: Action, seed: u64) -> Self {
+        let demo = episode(action, seed, 64).unwrap();
+        let steps = Task::Finish.steps(demo.len(), 5).unwrap();
+        let observations = Observations::from_sequence(&demo, &steps.observed).unwrap();
+        let future = demo.times()[steps.predicted_from..].to_vec();
+        let marginal = p
+            .predict(&observations, &future[future.len() - 1..], 0.5)
+            .unwrap();
+        let (mean, sigma) = (marginal.joint_mean_at(0), marginal.joint_sigma_at(0));
+        LastStep {
+            observations,
+            future,
+            mean: mean.to_vec(),
+            sigma: sigma.to_vec(),
+        }
+    }
+
+    /// `samples` futures drawn so (as drawn, τ 1, every future from all the observations:
+    /// each drawn step from the one Gaussian), each one's drawn joints standardised by it.
+    fn standardised(&self, p: &Predictor, samples: usize, sampling: Sampling) -> Vec<Vec<f32>> {
+        let sampling = Sampling {
+            samples,
+            grid: 1,
+            temperature: 1.0,
+            oversample: 1,
+            bootstrap: false,
+            ..sampling
+        };
+        let futures = draw_futures(p, &self.observations, &self.future, 0.5, &sampling).unwrap();
+        (futures.iter())
+            .map(|f| {
+                let x = &f.drawn[0].1;
+                let z = x.iter().zip(&self.mean).zip(&self.sigma);
+                z.map(|((x, m), s)| (x - m) / s).collect()
+            })
+            .collect()
+    }
+}
+
 #[test]
 fn a_drawn_step_s_joints_vary_as_the_correlation_says() {
     let d = predictor().joint_count();
     // Joint values 0 and 1 together (0.9), 2 against 3 (-0.8), the rest on their own.
     let p = correlated(&[(0, 1, 0.9), (2, 3, -0.8)]);
-    let demo = episode(Action::Move, 626_262, 64).unwrap();
-    let steps = Task::Finish.steps(demo.len(), 5).unwrap();
-    let observations = Observations::from_sequence(&demo, &steps.observed).unwrap();
-    let times = demo.times();
-    let future = &times[steps.predicted_from..];
-    // One drawn step (the last): its Gaussian is the prediction given the observations alone.
-    let t = *future.last().unwrap();
-    let marginal = p.predict(&observations, &[t], 0.5).unwrap();
-    let (mean, sigma) = (marginal.joint_mean_at(0), marginal.joint_sigma_at(0));
+    let case = LastStep::of(&p, Action::Move, 626_262);
+    let (observations, future) = (&case.observations, &case.future[..]);
+    // Drawn as such (representatives would spread wider than the Gaussian), along every
+    // direction of R; one column per joint value.
     let standardised = |joints: JointDraws| {
-        // Drawn as such: representatives would spread wider than the Gaussian.
-        // Every direction of R, every future from all the observations: each drawn step
-        // from the one Gaussian.
         let sampling = Sampling {
-            samples: 200,
-            grid: 1,
-            temperature: 1.0,
-            oversample: 1,
             joints,
             components: None,
-            bootstrap: false,
             ..Sampling::default()
         };
-        let futures = draw_futures(&p, &observations, future, 0.5, &sampling).unwrap();
-        let column = |j: usize| -> Vec<f64> {
-            let drawn = futures.iter().map(|f| &f.drawn[0].1);
-            drawn
-                .map(|x| ((x[j] - mean[j]) / sigma[j]) as f64)
-                .collect()
-        };
+        let rows = case.standardised(&p, 200, sampling);
+        let column = |j: usize| rows.iter().map(|z| z[j] as f64).collect::<Vec<f64>>();
         (0..d).map(column).collect::<Vec<_>>()
     };
     let z = standardised(JointDraws::Auto);
@@ -105,7 +136,7 @@ fn a_drawn_step_s_joints_vary_as_the_correlation_says() {
         joints: JointDraws::Correlated,
         ..Sampling::default()
     };
-    let err = draw_futures(&plain, &observations, future, 0.5, &sampling).unwrap_err();
+    let err = draw_futures(&plain, observations, future, 0.5, &sampling).unwrap_err();
     assert!(err.to_string().contains("joints"), "{err}");
     let wrong = JointCorrelation::new("r", vec![1.0, 0.0, 0.0, 1.0], 2).unwrap();
     let err = predictor().with_joint_correlation(Some(wrong)).unwrap_err();
@@ -114,33 +145,15 @@ fn a_drawn_step_s_joints_vary_as_the_correlation_says() {
 
 #[test]
 fn drawn_along_one_principal_direction_only_the_leading_joints_move() {
-    let d = predictor().joint_count();
     // Joint values 0 and 1 together (0.9: R's leading direction, λ 1.9), 2 against 3 (-0.5).
     let p = correlated(&[(0, 1, 0.9), (2, 3, -0.5)]);
-    let demo = episode(Action::Grasp, 515_151, 64).unwrap();
-    let steps = Task::Finish.steps(demo.len(), 5).unwrap();
-    let observations = Observations::from_sequence(&demo, &steps.observed).unwrap();
-    let future = &demo.times()[steps.predicted_from..];
-    let t = *future.last().unwrap();
-    let marginal = p.predict(&observations, &[t], 0.5).unwrap();
-    let (mean, sigma) = (marginal.joint_mean_at(0), marginal.joint_sigma_at(0));
+    let case = LastStep::of(&p, Action::Grasp, 515_151);
     let draw = |components| {
         let sampling = Sampling {
-            samples: 20,
-            grid: 1,
-            temperature: 1.0,
-            oversample: 1,
             components,
-            bootstrap: false,
             ..Sampling::default()
         };
-        let futures = draw_futures(&p, &observations, future, 0.5, &sampling).unwrap();
-        (futures.iter())
-            .map(|f| {
-                let x = &f.drawn[0].1;
-                (0..d).map(|j| (x[j] - mean[j]) / sigma[j]).collect()
-            })
-            .collect::<Vec<Vec<f32>>>()
+        case.standardised(&p, 20, sampling)
     };
     let (one, all) = (draw(Some(1)), draw(None));
     for (z, z_all) in one.iter().zip(&all) {
@@ -160,7 +173,7 @@ fn drawn_along_one_principal_direction_only_the_leading_joints_move() {
         components: Some(0),
         ..Sampling::default()
     };
-    let err = draw_futures(&p, &observations, future, 0.5, &bad).unwrap_err();
+    let err = draw_futures(&p, &case.observations, &case.future, 0.5, &bad).unwrap_err();
     assert!(err.to_string().contains("components"), "{err}");
 }
 

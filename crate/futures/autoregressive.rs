@@ -74,14 +74,13 @@ pub fn draw_futures_from(
     };
     let grid = grid(target_times, sampling.grid);
     let components = sampling.components.unwrap_or(usize::MAX);
+    let times = sampling.bootstrap.then(|| observed.observed_times());
     let mut first = Vec::new();
     let candidates = (0..sampling.samples * sampling.oversample)
         .map(|s| {
             let mut rng = future_rng(sampling, s);
-            let resample = sampling
-                .bootstrap
-                .then(|| bootstrap(&observed.observed_times(), observed.len(), &mut rng))
-                .flatten();
+            let resample =
+                (times.as_ref()).and_then(|times| bootstrap(times, observed.len(), &mut rng));
             let mut order = grid.clone();
             if sampling.order == Order::Random {
                 for i in (1..order.len()).rev() {
@@ -90,21 +89,14 @@ pub fn draw_futures_from(
             }
             // The first step's prediction is shared only by futures that see the same
             // observations.
-            let (resampled, mut own_first);
-            let (observed, first) = match &resample {
-                Some(indices) => {
-                    (resampled, own_first) = (observed.select(indices)?, Vec::new());
-                    (&resampled, &mut own_first)
-                }
-                None => (observed, &mut first),
+            let seen = seen_contexts(observed, resample.as_deref())?;
+            let mut own_first = Vec::new();
+            let first = match resample {
+                Some(_) => &mut own_first,
+                None => &mut first,
             };
-            let (contexts, steps) = condition_on_steps(
-                predictor,
-                observed,
-                &order,
-                blend,
-                first,
-                |_, mean, sigma| {
+            let (contexts, steps) =
+                condition_on_steps(predictor, &seen, &order, blend, first, |_, mean, sigma| {
                     let eps: Vec<f32> = mean.iter().map(|_| standard_normal(&mut rng)).collect();
                     let eps = match correlation {
                         Some(r) => r.correlate(&eps, components),
@@ -112,8 +104,7 @@ pub fn draw_futures_from(
                     };
                     let draw = mean.iter().zip(sigma).zip(eps);
                     (draw.map(|((m, s), e)| m + sampling.temperature * s * e)).collect()
-                },
-            )?;
+                })?;
             // A candidate's contexts are rebuilt from its steps if it is kept: K × S of them
             // would hold K × S copies of every observed frame.
             let contexts = (sampling.oversample == 1).then_some(contexts);
@@ -139,11 +130,11 @@ pub fn draw_futures_from(
     keep.into_iter()
         .map(|i| {
             let candidate = candidates[i].take().expect("each candidate kept once");
-            let contexts = match (candidate.contexts, &candidate.resample) {
-                (Some(contexts), _) => contexts,
-                (None, None) => with_steps(predictor, observed.clone(), &candidate.steps)?,
-                (None, Some(indices)) => {
-                    with_steps(predictor, observed.select(indices)?, &candidate.steps)?
+            let contexts = match candidate.contexts {
+                Some(contexts) => contexts,
+                None => {
+                    let seen = seen_contexts(observed, candidate.resample.as_deref())?;
+                    with_steps(predictor, seen, &candidate.steps)?
                 }
             };
             Ok(Future {
@@ -164,6 +155,17 @@ struct Candidate {
     resample: Option<Vec<usize>>,
     /// Its drawn steps, in the order drawn.
     steps: Vec<Observations>,
+}
+
+/// The observed contexts a future conditions on: all of them, or its bootstrap `resample`.
+fn seen_contexts(
+    observed: &EncodedContexts,
+    resample: Option<&[usize]>,
+) -> Result<EncodedContexts, ModelError> {
+    match resample {
+        Some(indices) => observed.select(indices),
+        None => Ok(observed.clone()),
+    }
 }
 
 /// A bootstrap resample of the observations at `times`: as many indices, drawn with
