@@ -3,7 +3,7 @@
 # model (assets/models/attn-sim.dmbn) finishing grasps and pushes from their first 30%.
 #
 #   bash docs/futures.sh design [OUT]   # the design sets (seeds 1000000-, 1400000-, 1500000-, 1600000-): the sampling settings compared
-#   bash docs/futures.sh final  [OUT]   # the three fresh sets (seeds 1700000-, 1800000-, 1900000-): the reported table
+#   bash docs/futures.sh final  [OUT]   # the three fresh sets (seeds 2500000-, 2600000-, 2700000-): the reported table
 #                                       # (the defaults; the 8 as drawn; drawn with independent joints; the defaults before)
 #   bash docs/futures.sh latent [OUT]   # the latent path against autoregressive sampling, on the design set
 #   bash docs/futures.sh script         # what 8 futures drawn from the simulator's script itself would score
@@ -78,30 +78,31 @@ case $what in
         name="$out/design-$seed-g$grid-$order-t$tau-$joints-k$k"
         "$dmbn" imitate --model "$model" --data "$set" --task finish --samples 8 --grid "$grid" \
           --order "$order" --temperature "$tau" --joints "$joints" --oversample "$k" --components all \
-          --bootstrap false --json "$name.json" >"$name.txt"
+          --bootstrap false --stage false --json "$name.json" >"$name.txt"
         grep -A5 "sampled futures each" "$name.txt" | grep '^| [gm]' | sed "s/^/$seed g$grid $order τ$tau $joints K$k /"
       done
     done
-    # C (principal directions), bootstrap, τ on four design sets (2 steps left to right,
-    # correlated, K = 4). The defaults: 3 true 0.85.
-    for cfg in "all false 0.7" "3 false 0.85" "3 false 1" "all true 0.7" "3 true 0.85" "3 true 0.7" "3 true 1"; do
-      read -r c boot tau <<<"$cfg"
+    # C (principal directions), bootstrap, the joint stage, τ on four design sets (2 steps
+    # left to right, correlated, K = 4). The defaults: 3 true true 0.7.
+    for cfg in "all false false 0.7" "3 false false 0.85" "3 false false 1" "all true false 0.7" "3 true false 0.85" \
+      "3 true false 0.7" "3 true false 1" "3 true true 0.7"; do
+      read -r c boot stage tau <<<"$cfg"
       for seed in 1000000 1400000 1500000 1600000; do
         set=$(data $seed)
-        name="$out/design-$seed-c$c-boot$boot-t$tau"
+        name="$out/design-$seed-c$c-boot$boot-stage$stage-t$tau"
         "$dmbn" imitate --model "$model" --data "$set" --task finish --samples 8 --components "$c" \
-          --bootstrap "$boot" --temperature "$tau" --json "$name.json" >"$name.txt"
-        grep -A5 "sampled futures each" "$name.txt" | grep '^| [gm]' | sed "s/^/$seed C$c bootstrap $boot τ$tau /"
+          --bootstrap "$boot" --stage "$stage" --temperature "$tau" --json "$name.json" >"$name.txt"
+        grep -A5 "sampled futures each" "$name.txt" | grep '^| [gm]' | sed "s/^/$seed C$c bootstrap $boot stage $stage τ$tau /"
       done
     done
     ;;
   final)
-    for seed in 1700000 1800000 1900000; do
+    for seed in 2500000 2600000 2700000; do
       set=$(data $seed)
       "$dmbn" imitate --model "$model" --data "$set" --task finish --samples 8 --json "$out/finish-$seed.json" | tee "$out/finish-$seed.txt"
-      # The defaults before (every direction of R, every future from all the observations, τ 0.7).
-      "$dmbn" imitate --model "$model" --data "$set" --task finish --samples 8 --components all --bootstrap false \
-        --temperature 0.7 --json "$out/finish-before-$seed.json" | tee "$out/finish-before-$seed.txt"
+      # The defaults before (the network's own joints between the drawn steps, τ 0.85).
+      "$dmbn" imitate --model "$model" --data "$set" --task finish --samples 8 --stage false \
+        --temperature 0.85 --json "$out/finish-before-$seed.json" | tee "$out/finish-before-$seed.txt"
       # The 8 as drawn (no representatives), and drawn with independent joints.
       "$dmbn" imitate --model "$model" --data "$set" --task finish --samples 8 --oversample 1 \
         --json "$out/finish-drawn-$seed.json" | tee "$out/finish-drawn-$seed.txt"
@@ -110,7 +111,7 @@ case $what in
       "$dmbn" imitate --model "$model" --data "$set" --task frames --json "$out/frames-$seed.json" | tee "$out/frames-$seed.txt"
       "$dmbn" score --model "$model" --data "$set" --scenario extrap --samples 8 --json "$out/score-$seed.json" | tee "$out/score-$seed.txt"
     done
-    for seed in 1700000 1800000 1900000; do
+    for seed in 2500000 2600000 2700000; do
       spread "$out/finish-$seed.json" "set $seed, the defaults"
       spread "$out/finish-before-$seed.json" "set $seed, the defaults before"
       spread "$out/finish-drawn-$seed.json" "set $seed, as drawn"
@@ -162,7 +163,7 @@ case $what in
       grep -A5 "sampled futures each" "$out/latent-$run.txt" | grep '^| [gm]' | sed "s/^/$run /"
       spread "$out/latent-$run.json" "$run"
     done
-    spread "$out/design-1000000-c3-boottrue-t0.85.json" "attn-sim, the defaults (bash docs/futures.sh design)"
+    spread "$out/design-1000000-c3-boottrue-stagetrue-t0.7.json" "attn-sim, the defaults (bash docs/futures.sh design)"
     for run in independent-k1 correlated-k1 correlated-k4; do
       spread "$out/design-1000000-g2-left-to-right-t0.7-$run.json" "attn-sim-ar-0.7-$run (bash docs/futures.sh design)"
     done

@@ -339,6 +339,7 @@ fn dmbn_sample_writes_the_futures_and_refuses_bad_settings() {
         (&["--order", "backwards"][..], "left-to-right or random"),
         (&["--components", "0"][..], "1 or more, or all"),
         (&["--bootstrap", "maybe"][..], "--bootstrap"),
+        (&["--stage", "maybe"][..], "--stage"),
     ] {
         let o = run(extra, &bad);
         let err = String::from_utf8_lossy(&o.stderr);

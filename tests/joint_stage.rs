@@ -1,5 +1,6 @@
 //! The joint stage: a fresh one predicts the interpolated reads and only frames-only
-//! predictions use it, it survives the model file, bad files are refused, fitting it lowers
+//! predictions and sampled futures (between the observations and the drawn steps, passing
+//! through them) use it, it survives the model file, bad files are refused, fitting it lowers
 //! the error of the reads' interpolation on demonstrations it did not see, the shipped one
 //! beats its network on unseen demonstrations (joints and pushes), and `train --joint-stage`
 //! adds one to a model file.
@@ -9,6 +10,7 @@ mod support;
 
 use burn::tensor::{Device, Tensor, TensorData};
 use dmbn::data::{Joints, JOINTS};
+use dmbn::futures::{draw_futures, trajectories, Sampling};
 use dmbn::imitate::{imitate, Task};
 use dmbn::model::{self, JointStage, JointStageConfig, ModelError};
 use dmbn::predict::{Observations, Predictor};
@@ -91,6 +93,102 @@ fn a_fresh_stage_predicts_the_reads_interpolated_and_only_from_frames_alone() {
             .image_mean,
         "the frames are the network's"
     );
+}
+
+#[test]
+fn a_sampled_future_s_joints_come_from_the_stage_whatever_the_blend() {
+    let (predictor, _) = with_fresh_stage();
+    let plain = network_only();
+    let demo = episode(Action::Move, 702, 64).unwrap();
+    let t = demo.len();
+    let observed = Observations::from_sequence(&demo, &[0, t / 7, 3 * t / 10]).unwrap();
+    let times = demo.times();
+    let future = &times[3 * t / 10 + 1..];
+    let sampling = Sampling {
+        samples: 3,
+        oversample: 1,
+        ..Sampling::default()
+    };
+    let futures = draw_futures(&predictor, &observed, future, 0.5, &sampling).unwrap();
+    let rows = trajectories(&predictor, &futures, future).unwrap();
+    for (f, rows) in futures.iter().zip(&rows) {
+        // The stage reads each observed time the future conditions on (its bootstrap resample
+        // repeats some) and each drawn step once.
+        let reads = f.encoding.reads.as_ref().expect("a future's reads");
+        let mut order: Vec<usize> = (0..reads.times.len()).collect();
+        order.sort_by(|&a, &b| reads.times[a].total_cmp(&reads.times[b]));
+        let sorted: Vec<f32> = order.iter().map(|&i| reads.times[i]).collect();
+        assert!(sorted.windows(2).all(|w| w[0] < w[1]), "{sorted:?}");
+        assert_eq!(sorted[sorted.len() - 1], future[future.len() - 1]);
+        assert!(f.drawn.iter().all(|(u, _)| sorted.contains(u)));
+        assert!(
+            sorted.contains(&observed.times[2]),
+            "the latest observation"
+        );
+        let joints = Joints::from_rows(
+            &order
+                .iter()
+                .map(|&i| std::array::from_fn::<f32, JOINTS, _>(|j| reads.joints[i][j]))
+                .collect::<Vec<_>>(),
+        );
+        // A fresh stage interpolates the reads: the future's joints at every imagined step.
+        for (k, &time) in future.iter().enumerate() {
+            let want = interpolate(&sorted, &joints, time);
+            for j in 0..JOINTS {
+                assert!((rows[k][j] - want[j]).abs() < 1e-5, "step {k} joint {j}");
+            }
+        }
+    }
+    // The network alone draws the same steps but decodes its own joints between them.
+    let alone = draw_futures(&plain, &observed, future, 0.5, &sampling).unwrap();
+    assert!(alone.iter().all(|f| f.encoding.reads.is_none()));
+    let drawn =
+        |fs: &[dmbn::futures::Future]| -> Vec<_> { fs.iter().map(|f| f.drawn.clone()).collect() };
+    assert_eq!(drawn(&alone), drawn(&futures));
+    let alone_rows = trajectories(&plain, &alone, future).unwrap();
+    assert_ne!(alone_rows, rows);
+    // Told not to, the stage stays out: the network's own joints.
+    let without = Sampling {
+        stage: false,
+        ..sampling
+    };
+    let off = draw_futures(&predictor, &observed, future, 0.5, &without).unwrap();
+    assert!(off.iter().all(|f| f.encoding.reads.is_none()));
+    assert_eq!(trajectories(&predictor, &off, future).unwrap(), alone_rows);
+    let frames_only = draw_futures(&predictor, &observed, future, 1.0, &without).unwrap();
+    assert!(frames_only.iter().all(|f| f.encoding.reads.is_none()));
+}
+
+#[test]
+fn through_its_reads_the_stage_moves_none_of_them_and_shapes_the_path_between() {
+    let shipped = Predictor::load(support::asset("models/attn-sim.dmbn")).unwrap();
+    let stage = shipped.model().joint_stage().unwrap();
+    let demo = episode(Action::Grasp, 703, 64).unwrap();
+    let t = demo.len();
+    let steps = [0, t / 7, 3 * t / 10, 13 * t / 20, t - 1];
+    let reads = shipped
+        .reads(&Observations::from_sequence(&demo, &steps).unwrap())
+        .unwrap();
+    let times: Vec<f32> = steps.iter().map(|&k| demo.times()[k]).collect();
+    let device = Device::flex();
+    let (corrected, _) = stage.predict(&times, &reads, &times, &device);
+    let (through, _) = stage.predict_through(&times, &reads, &times, &device);
+    let apart = |a: &Joints, b: &Joints| {
+        (a.rows().zip(b.rows()))
+            .flat_map(|(x, y)| x.iter().zip(y).map(|(p, q)| (p - q).abs()))
+            .fold(0.0f32, f32::max)
+    };
+    assert!(apart(&corrected, &reads) > 1e-3, "the stage corrects reads");
+    assert!(
+        apart(&through, &reads) < 1e-5,
+        "through them, it moves none"
+    );
+    // Between them, the stage's shape less its corrections interpolated: apart from the
+    // straight line between the reads (what a fresh stage gives).
+    let between = demo.times()[t / 2];
+    let (path, _) = stage.predict_through(&times, &reads, &[between], &device);
+    let line = interpolate(&times, &reads, between);
+    assert!(path[0].iter().zip(line).any(|(p, l)| (p - l).abs() > 1e-3));
 }
 
 #[test]

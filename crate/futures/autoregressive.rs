@@ -138,7 +138,7 @@ pub fn draw_futures_from(
                 }
             };
             Ok(Future {
-                encoding: predictor.represent(&contexts, blend)?,
+                encoding: predictor.represent_future(&contexts, blend, sampling.stage)?,
                 drawn: (candidate.steps.into_iter())
                     .map(|step| (step.times[0], step.joints))
                     .collect(),

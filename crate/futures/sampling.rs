@@ -157,6 +157,11 @@ pub struct Sampling {
     /// per resample spreads over those guesses (Lee et al., "Bootstrapping Neural Processes",
     /// NeurIPS 2020).
     pub bootstrap: bool,
+    /// Where the model file has a joint stage ([`crate::model::JointStage`]), it gives an
+    /// autoregressive future's joints between the observations and the drawn steps, whatever
+    /// the blend: the network alone, conditioned on them, cuts the corners between them and
+    /// lands pushes short (`false`: the network's own, frames only too).
+    pub stage: bool,
     /// K: autoregressive futures drawn K × S, of which the S representatives are kept
     /// ([`super::representatives`]); 1: the S drawn. Latent futures are drawn as such.
     pub oversample: usize,
@@ -171,9 +176,9 @@ pub struct Sampling {
 /// the page's default model finishing 100 grasps and 100 pushes from their first 30%; docs/
 /// results.md, *Many futures*): 2 steps drawn (1, 3, 4 and 8 covered fewer demonstrations),
 /// left to right (random orders covered fewer), correlated joints along their 3 leading
-/// principal directions with τ 0.85, each future from a bootstrap resample of the
-/// observations, the representatives of 4 × S (docs/results.md has the figures, from four
-/// design sets).
+/// principal directions with τ 0.7, each future from a bootstrap resample of the
+/// observations, the joint stage between the drawn steps, the representatives of 4 × S
+/// (docs/results.md has the figures, from four design sets).
 impl Default for Sampling {
     fn default() -> Self {
         Sampling {
@@ -184,8 +189,9 @@ impl Default for Sampling {
             joints: JointDraws::Auto,
             components: Some(3),
             bootstrap: true,
+            stage: true,
             oversample: 4,
-            temperature: 0.85,
+            temperature: 0.7,
             seed: 0,
         }
     }
@@ -210,7 +216,7 @@ impl Sampling {
     }
 
     /// How the futures are drawn, in words (the reports' headings): "latent path, τ 1, seed
-    /// 0", "2 steps drawn, left-to-right, τ 0.85, seed 0", or for `auto` both.
+    /// 0", "2 steps drawn, left-to-right, τ 0.7, seed 0", or for `auto` both.
     pub fn describe(&self) -> String {
         let joints = match self.joints {
             JointDraws::Auto => "joints correlated where the file says",
@@ -224,6 +230,9 @@ impl Sampling {
         }
         if self.bootstrap {
             ar += ", each from a bootstrap resample of the observations";
+        }
+        if self.stage {
+            ar += ", the joint stage between them where the file has one";
         }
         if self.oversample > 1 {
             ar += &format!(", the representatives of {} × S", self.oversample);

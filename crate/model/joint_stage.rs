@@ -4,7 +4,7 @@ use burn::nn::Linear;
 use burn::tensor::activation::{gelu, softplus};
 use burn::tensor::{Device, Tensor, TensorData};
 
-use super::joint_stage_inputs::{joint_stage_input_len, joint_stage_inputs};
+use super::joint_stage_inputs::{interpolated, joint_stage_input_len, joint_stage_inputs};
 use crate::data::Joints;
 
 /// Hidden layers of the stage's network.
@@ -107,6 +107,31 @@ impl JointStage {
         let start = Tensor::from_data(TensorData::new(start, [m, d]), device);
         let (mean, sigma) = self.forward(x, start);
         (rows(mean), rows(sigma))
+    }
+
+    /// [`JointStage::predict`] for reads a trajectory passes through exactly (a sampled
+    /// future's observations and drawn steps): the stage's correction at each glimpse,
+    /// interpolated, is taken off, so that it shapes the path between the glimpses and
+    /// moves none of them (its correction is meant for reads of frames, not for draws).
+    pub fn predict_through(
+        &self,
+        times: &[f32],
+        reads: &Joints,
+        targets: &[f32],
+        device: &Device,
+    ) -> (Joints, Joints) {
+        let (mut mean, sigma) = self.predict(times, reads, targets, device);
+        let (at_glimpses, _) = self.predict(times, reads, times, device);
+        let mut corrections = Joints::with_width(reads.width());
+        for (at, read) in at_glimpses.rows().zip(reads.rows()) {
+            let c: Vec<f32> = at.iter().zip(read).map(|(a, r)| a - r).collect();
+            corrections.push(&c);
+        }
+        let taken = interpolated(times, &corrections, targets);
+        for (k, c) in taken.iter().enumerate() {
+            mean.row_mut(k).iter_mut().zip(c).for_each(|(m, c)| *m -= c);
+        }
+        (mean, sigma)
     }
 }
 

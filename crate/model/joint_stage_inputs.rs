@@ -71,6 +71,16 @@ fn slots(order: &[usize], times: &[f32], phase: f32) -> Vec<usize> {
     near
 }
 
+/// `values` (one row per glimpse at `times`, any order) linearly interpolated at each of
+/// `targets`, held constant beyond the first and the last glimpse.
+pub(super) fn interpolated(times: &[f32], values: &Joints, targets: &[f32]) -> Vec<Vec<f32>> {
+    let mut order: Vec<usize> = (0..times.len()).collect();
+    order.sort_by(|&a, &b| times[a].total_cmp(&times[b]));
+    (targets.iter())
+        .map(|&phase| interpolate(&order, times, values, phase))
+        .collect()
+}
+
 /// The reads linearly interpolated at `phase` (`order`: the glimpses in time order).
 fn interpolate(order: &[usize], times: &[f32], reads: &Joints, phase: f32) -> Vec<f32> {
     let (first, last) = (order[0], order[order.len() - 1]);

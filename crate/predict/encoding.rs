@@ -31,6 +31,32 @@ pub struct Reads {
     pub times: Vec<f32>,
     /// The joints read at each, in radians (and gripper units).
     pub joints: crate::data::Joints,
+    /// Whether the trajectory passes through the reads (a sampled future's observations and
+    /// drawn steps), so that the stage shapes only the path between them
+    /// ([`crate::model::JointStage::predict_through`]); frames-only reads are the network's
+    /// guesses, which the stage corrects.
+    pub through: bool,
+}
+
+impl Reads {
+    /// The reads a sampled future passes through ([`crate::futures`]): each observed time's
+    /// first (a bootstrap resample repeats observations, and the stage learnt from distinct
+    /// glimpses), `through`.
+    pub fn passed_through(self) -> Reads {
+        let mut times = Vec::with_capacity(self.times.len());
+        let mut joints = crate::data::Joints::with_width(self.joints.width());
+        for (&t, row) in self.times.iter().zip(self.joints.rows()) {
+            if !times.contains(&t) {
+                times.push(t);
+                joints.push(row);
+            }
+        }
+        Reads {
+            times,
+            joints,
+            through: true,
+        }
+    }
 }
 
 #[cfg(test)]

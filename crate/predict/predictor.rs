@@ -4,8 +4,8 @@ use super::{Encoding, Observations, Reads, SequencePrediction};
 use crate::augment::Batch;
 use crate::data::Joints;
 use crate::model::{
-    self, tensors, EncodedContexts, JointCorrelation, JointSigmaScale, Model, ModelError,
-    ModelKind, Normalization, Representation,
+    self, tensors, EncodedContexts, JointCorrelation, JointSigmaScale, JointStage, Model,
+    ModelError, ModelKind, Normalization, Representation,
 };
 
 /// A trained model ready for inference on the CPU (flex backend): encode observations once,
@@ -149,6 +149,35 @@ impl Predictor {
         contexts: &EncodedContexts,
         blend: f32,
     ) -> Result<Encoding, ModelError> {
+        self.represent_reading(contexts, blend, blend == 1.0)
+    }
+
+    /// [`Predictor::represent`] for a sampled future ([`crate::futures`]): its drawn steps are
+    /// joints the arm passes through, as the reads of frames are, so with `stage` a model's
+    /// joint stage answers between the observations and them whatever the blend (between
+    /// them, the network alone lands pushes short); without, the network alone, frames only
+    /// too.
+    pub fn represent_future(
+        &self,
+        contexts: &EncodedContexts,
+        blend: f32,
+        stage: bool,
+    ) -> Result<Encoding, ModelError> {
+        let encoding = self.represent_reading(contexts, blend, stage)?;
+        Ok(Encoding {
+            reads: encoding.reads.map(Reads::passed_through),
+            ..encoding
+        })
+    }
+
+    /// [`Predictor::represent`], with the network's reads at the observed times for the joint
+    /// stage where `read` and the model has one.
+    fn represent_reading(
+        &self,
+        contexts: &EncodedContexts,
+        blend: f32,
+        read: bool,
+    ) -> Result<Encoding, ModelError> {
         check_blend(blend)?;
         let c = Tensor::<1>::from_data(
             TensorData::new(vec![blend; contexts.batch()], [contexts.batch()]),
@@ -161,11 +190,12 @@ impl Predictor {
                 (lo.min(t), hi.max(t))
             });
         let representation = self.model.represent(contexts, c)?;
-        // The joint stage answers for frames only, from what the network reads there.
+        // The joint stage answers from what the network reads at the observed times.
         let reads = match self.model.joint_stage() {
-            Some(_) if blend == 1.0 && !observed.is_empty() => Some(Reads {
+            Some(_) if read && !observed.is_empty() => Some(Reads {
                 joints: self.network_joints(&representation, &observed)?,
                 times: observed,
+                through: false,
             }),
             _ => None,
         };
@@ -243,7 +273,11 @@ impl Predictor {
         let (Some(stage), Some(reads)) = (self.model.joint_stage(), encoding.reads.as_ref()) else {
             return;
         };
-        let (mean, sigma) = stage.predict(&reads.times, &reads.joints, targets, &self.device);
+        let predict = match reads.through {
+            true => JointStage::predict_through,
+            false => JointStage::predict,
+        };
+        let (mean, sigma) = predict(stage, &reads.times, &reads.joints, targets, &self.device);
         for (k, &t) in targets.iter().enumerate() {
             if encoding.is_between_observations(t) {
                 splice(k, &mean[k], &sigma[k]);

@@ -176,6 +176,11 @@ pub struct SamplingArgs {
     /// observations (the latest always kept), or on all of them (`false`).
     #[arg(long, default_value_t = Sampling::default().bootstrap, action = clap::ArgAction::Set)]
     pub bootstrap: bool,
+    /// Where the model file has a joint stage, it gives an autoregressive future's joints
+    /// between the observations and the drawn steps, whatever the blend (`false`: the
+    /// network's own).
+    #[arg(long, default_value_t = Sampling::default().stage, action = clap::ArgAction::Set)]
+    pub stage: bool,
     /// K: draw K × S autoregressive futures and keep their S representatives (k-means over
     /// the drawn steps), so that the S spread over what may happen; 1: the S drawn.
     #[arg(long, default_value_t = Sampling::default().oversample)]
@@ -200,6 +205,7 @@ impl SamplingArgs {
             joints: self.joints,
             components: self.components,
             bootstrap: self.bootstrap,
+            stage: self.stage,
             oversample: self.oversample,
             temperature: self.temperature,
             seed: self.seed,
