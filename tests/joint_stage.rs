@@ -125,12 +125,7 @@ fn a_sampled_future_s_joints_come_from_the_stage_whatever_the_blend() {
             sorted.contains(&observed.times[2]),
             "the latest observation"
         );
-        let joints = Joints::from_rows(
-            &order
-                .iter()
-                .map(|&i| std::array::from_fn::<f32, JOINTS, _>(|j| reads.joints[i][j]))
-                .collect::<Vec<_>>(),
-        );
+        let joints = Joints::from_slices(JOINTS, order.iter().map(|&i| reads.joints.row(i)));
         // A fresh stage interpolates the reads: the future's joints at every imagined step.
         for (k, &time) in future.iter().enumerate() {
             let want = interpolate(&sorted, &joints, time);

@@ -121,11 +121,9 @@ impl JointStage {
         device: &Device,
     ) -> (Joints, Joints) {
         let (mut mean, sigma) = self.predict(times, reads, targets, device);
-        let (at_glimpses, _) = self.predict(times, reads, times, device);
-        let mut corrections = Joints::with_width(reads.width());
-        for (at, read) in at_glimpses.rows().zip(reads.rows()) {
-            let c: Vec<f32> = at.iter().zip(read).map(|(a, r)| a - r).collect();
-            corrections.push(&c);
+        let (mut corrections, _) = self.predict(times, reads, times, device);
+        for (k, read) in reads.rows().enumerate() {
+            (corrections.row_mut(k).iter_mut().zip(read)).for_each(|(c, r)| *c -= r);
         }
         let taken = interpolated(times, &corrections, targets);
         for (k, c) in taken.iter().enumerate() {

@@ -38,27 +38,6 @@ pub struct Reads {
     pub through: bool,
 }
 
-impl Reads {
-    /// The reads a sampled future passes through ([`crate::futures`]): each observed time's
-    /// first (a bootstrap resample repeats observations, and the stage learnt from distinct
-    /// glimpses), `through`.
-    pub fn passed_through(self) -> Reads {
-        let mut times = Vec::with_capacity(self.times.len());
-        let mut joints = crate::data::Joints::with_width(self.joints.width());
-        for (&t, row) in self.times.iter().zip(self.joints.rows()) {
-            if !times.contains(&t) {
-                times.push(t);
-                joints.push(row);
-            }
-        }
-        Reads {
-            times,
-            joints,
-            through: true,
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use burn::tensor::{Device, Tensor};

@@ -149,7 +149,11 @@ impl Predictor {
         contexts: &EncodedContexts,
         blend: f32,
     ) -> Result<Encoding, ModelError> {
-        self.represent_reading(contexts, blend, blend == 1.0)
+        let reading = match blend == 1.0 {
+            true => Reading::Frames,
+            false => Reading::None,
+        };
+        self.represent_reading(contexts, blend, reading)
     }
 
     /// [`Predictor::represent`] for a sampled future ([`crate::futures`]): its drawn steps are
@@ -163,20 +167,20 @@ impl Predictor {
         blend: f32,
         stage: bool,
     ) -> Result<Encoding, ModelError> {
-        let encoding = self.represent_reading(contexts, blend, stage)?;
-        Ok(Encoding {
-            reads: encoding.reads.map(Reads::passed_through),
-            ..encoding
-        })
+        let reading = match stage {
+            true => Reading::Through,
+            false => Reading::None,
+        };
+        self.represent_reading(contexts, blend, reading)
     }
 
     /// [`Predictor::represent`], with the network's reads at the observed times for the joint
-    /// stage where `read` and the model has one.
+    /// stage as `reading` says, where the model has one.
     fn represent_reading(
         &self,
         contexts: &EncodedContexts,
         blend: f32,
-        read: bool,
+        reading: Reading,
     ) -> Result<Encoding, ModelError> {
         check_blend(blend)?;
         let c = Tensor::<1>::from_data(
@@ -190,13 +194,24 @@ impl Predictor {
                 (lo.min(t), hi.max(t))
             });
         let representation = self.model.represent(contexts, c)?;
-        // The joint stage answers from what the network reads at the observed times.
-        let reads = match self.model.joint_stage() {
-            Some(_) if read && !observed.is_empty() => Some(Reads {
-                joints: self.network_joints(&representation, &observed)?,
-                times: observed,
-                through: false,
-            }),
+        // The joint stage answers from what the network reads at the observed times; a
+        // future's at each time once (a bootstrap resample repeats observations, and the
+        // stage learnt from distinct glimpses).
+        let through = matches!(reading, Reading::Through);
+        let reads = match (self.model.joint_stage(), reading) {
+            (Some(_), Reading::Frames | Reading::Through) if !observed.is_empty() => {
+                let mut times = Vec::with_capacity(observed.len());
+                for t in observed {
+                    if !(through && times.contains(&t)) {
+                        times.push(t);
+                    }
+                }
+                Some(Reads {
+                    joints: self.network_joints(&representation, &times)?,
+                    times,
+                    through,
+                })
+            }
             _ => None,
         };
         Ok(Encoding {
@@ -392,6 +407,17 @@ fn check_times(target_times: &[f32]) -> Result<(), ModelError> {
         )),
         None => Ok(()),
     }
+}
+
+/// Which reads an encoding keeps for the model's joint stage ([`Reads`]).
+#[derive(Debug, Clone, Copy)]
+enum Reading {
+    /// None: the network answers.
+    None,
+    /// The network's reads of frames alone, which the stage corrects.
+    Frames,
+    /// A sampled future's observations and drawn steps, which it passes through.
+    Through,
 }
 
 /// Fails unless `blend` is a coefficient in [0, 1].
