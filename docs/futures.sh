@@ -3,7 +3,7 @@
 # model (assets/models/attn-sim.dmbn) finishing grasps and pushes from their first 30%.
 #
 #   bash docs/futures.sh design [OUT]   # the design sets (seeds 1000000-, 1400000-, 1500000-, 1600000-): the sampling settings compared
-#   bash docs/futures.sh final  [OUT]   # the three fresh sets (seeds 2500000-, 2600000-, 2700000-): the reported table
+#   bash docs/futures.sh final  [OUT]   # the three fresh sets (seeds 2800000-, 2900000-, 3000000-): the reported table
 #                                       # (the defaults; the 8 as drawn; drawn with independent joints; the defaults before)
 #   bash docs/futures.sh latent [OUT]   # the latent path against autoregressive sampling, on the design set
 #   bash docs/futures.sh script         # what 8 futures drawn from the simulator's script itself would score
@@ -27,6 +27,17 @@ mkdir -p "$out"
 data() {
   [ -d "$out/ur5-$1" ] || "$dmbn" simulate --out "$out/ur5-$1" --sequences 100 --seed "$1" >/dev/null
   echo "$out/ur5-$1"
+}
+
+# The page's model with one joint correlation pooled over both actions, fitted as it was
+# before the regions (the σ scales' 30 unseen episodes, seeds 700000-): the defaults before.
+pooled() {
+  if [ ! -f "$out/attn-sim-pooled.dmbn" ]; then
+    [ -d "$out/calib" ] || "$dmbn" simulate --out "$out/calib" --sequences 30 --seed 700000 >/dev/null
+    "$dmbn" calibrate --model "$model" --data "$out/calib" --ids 0-29 --fit correlation --regions 1 \
+      --out "$out/attn-sim-pooled.dmbn" >/dev/null
+  fi
+  echo "$out/attn-sim-pooled.dmbn"
 }
 
 # Where a run's futures take the object against the demonstrations (the ceiling's replays):
@@ -62,7 +73,8 @@ case $what in
   design)
     # grid order τ joints K (oversample) sets: the settings compared on the design set, those
     # of the oversampling on a second one too (seeds 1400000-); every correlated draw along
-    # all of R's directions, each future from all the observations.
+    # all of R's directions (pooled over both actions), each future from all the observations,
+    # every step at τ.
     for cfg in "1 left-to-right 1 independent 1 1" "2 left-to-right 1 independent 1 1" \
       "3 left-to-right 1 independent 1 1" "4 left-to-right 1 independent 1 1" "8 left-to-right 1 independent 1 1" \
       "4 random 1 independent 1 1" "8 random 1 independent 1 1" "2 left-to-right 0.85 independent 1 1" \
@@ -76,9 +88,9 @@ case $what in
         [ "$seed" = 1400000 ] && [ "$sets" = 1 ] && continue
         set=$(data $seed)
         name="$out/design-$seed-g$grid-$order-t$tau-$joints-k$k"
-        "$dmbn" imitate --model "$model" --data "$set" --task finish --samples 8 --grid "$grid" \
-          --order "$order" --temperature "$tau" --joints "$joints" --oversample "$k" --components all \
-          --bootstrap false --stage false --json "$name.json" >"$name.txt"
+        "$dmbn" imitate --model "$(pooled)" --data "$set" --task finish --samples 8 --grid "$grid" \
+          --order "$order" --temperature "$tau" --end-temperature "$tau" --joints "$joints" --oversample "$k" \
+          --components all --bootstrap false --stage false --json "$name.json" >"$name.txt"
         grep -A5 "sampled futures each" "$name.txt" | grep '^| [gm]' | sed "s/^/$seed g$grid $order τ$tau $joints K$k /"
       done
     done
@@ -90,19 +102,34 @@ case $what in
       for seed in 1000000 1400000 1500000 1600000; do
         set=$(data $seed)
         name="$out/design-$seed-c$c-boot$boot-stage$stage-t$tau"
-        "$dmbn" imitate --model "$model" --data "$set" --task finish --samples 8 --components "$c" \
-          --bootstrap "$boot" --stage "$stage" --temperature "$tau" --json "$name.json" >"$name.txt"
+        "$dmbn" imitate --model "$(pooled)" --data "$set" --task finish --samples 8 --components "$c" \
+          --bootstrap "$boot" --stage "$stage" --temperature "$tau" --end-temperature "$tau" \
+          --json "$name.json" >"$name.txt"
         grep -A5 "sampled futures each" "$name.txt" | grep '^| [gm]' | sed "s/^/$seed C$c bootstrap $boot stage $stage τ$tau /"
+      done
+    done
+    # The joint correlation pooled or a region per action (the shipped file), and the
+    # future's end drawn at τ 0.7 or 1 (the rest at 0.7). The defaults: actions 1.
+    for cfg in "pooled 1" "actions 0.7" "actions 1"; do
+      read -r regions end <<<"$cfg"
+      file=$model
+      [ "$regions" = pooled ] && file=$(pooled)
+      for seed in 1000000 1400000 1500000 1600000; do
+        set=$(data $seed)
+        name="$out/design-$seed-$regions-end$end"
+        "$dmbn" imitate --model "$file" --data "$set" --task finish --samples 8 --end-temperature "$end" \
+          --json "$name.json" >"$name.txt"
+        grep -A5 "sampled futures each" "$name.txt" | grep '^| [gm]' | sed "s/^/$seed R $regions, end τ$end /"
       done
     done
     ;;
   final)
-    for seed in 2500000 2600000 2700000; do
+    for seed in 2800000 2900000 3000000; do
       set=$(data $seed)
       "$dmbn" imitate --model "$model" --data "$set" --task finish --samples 8 --json "$out/finish-$seed.json" | tee "$out/finish-$seed.txt"
-      # The defaults before (the network's own joints between the drawn steps, τ 0.85).
-      "$dmbn" imitate --model "$model" --data "$set" --task finish --samples 8 --stage false \
-        --temperature 0.85 --json "$out/finish-before-$seed.json" | tee "$out/finish-before-$seed.txt"
+      # The defaults before (one joint correlation pooled over both actions, the end at τ 0.7).
+      "$dmbn" imitate --model "$(pooled)" --data "$set" --task finish --samples 8 --end-temperature 0.7 \
+        --json "$out/finish-before-$seed.json" | tee "$out/finish-before-$seed.txt"
       # The 8 as drawn (no representatives), and drawn with independent joints.
       "$dmbn" imitate --model "$model" --data "$set" --task finish --samples 8 --oversample 1 \
         --json "$out/finish-drawn-$seed.json" | tee "$out/finish-drawn-$seed.txt"
@@ -111,7 +138,7 @@ case $what in
       "$dmbn" imitate --model "$model" --data "$set" --task frames --json "$out/frames-$seed.json" | tee "$out/frames-$seed.txt"
       "$dmbn" score --model "$model" --data "$set" --scenario extrap --samples 8 --json "$out/score-$seed.json" | tee "$out/score-$seed.txt"
     done
-    for seed in 2500000 2600000 2700000; do
+    for seed in 2800000 2900000 3000000; do
       spread "$out/finish-$seed.json" "set $seed, the defaults"
       spread "$out/finish-before-$seed.json" "set $seed, the defaults before"
       spread "$out/finish-drawn-$seed.json" "set $seed, as drawn"

@@ -340,6 +340,7 @@ fn dmbn_sample_writes_the_futures_and_refuses_bad_settings() {
         (&["--components", "0"][..], "1 or more, or all"),
         (&["--bootstrap", "maybe"][..], "--bootstrap"),
         (&["--stage", "maybe"][..], "--stage"),
+        (&["--end-temperature", "9"][..], "`end_temperature` is 9"),
     ] {
         let o = run(extra, &bad);
         let err = String::from_utf8_lossy(&o.stderr);

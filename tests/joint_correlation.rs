@@ -184,12 +184,14 @@ fn dmbn_calibrate_fits_the_correlation_and_a_bad_one_is_refused() {
     support::simulated_dataset(&data, 0..4, &Action::ALL, 420_000);
     let model = support::asset("models/attn-sim.dmbn");
     let before = read_header(&std::fs::read(&model).unwrap()).unwrap();
-    let calibrate = |fit: &str, out: &std::path::Path| {
+    let calibrate = |fit: &str, out: &std::path::Path, more: &[&str]| {
         let run = Command::new(env!("CARGO_BIN_EXE_dmbn"))
             .arg("calibrate")
             .args(["--model".as_ref(), model.as_os_str()])
             .args(["--data".as_ref(), data.as_os_str()])
-            .args(["--ids", "0-3", "--fit", fit, "--out"])
+            .args(["--ids", "0-3", "--fit", fit])
+            .args(more)
+            .arg("--out")
             .arg(out)
             .output()
             .unwrap();
@@ -201,36 +203,58 @@ fn dmbn_calibrate_fits_the_correlation_and_a_bad_one_is_refused() {
         );
         (read_header(&std::fs::read(out).unwrap()).unwrap(), stdout)
     };
-    // The correlation alone: the σ scales as they were; 2 drawn steps of 8 sequences.
+    // The correlation alone: the σ scales as they were; 2 drawn steps of 8 sequences, a
+    // region per action (each with a centre: the mean pose its draws are nearest).
     let out = tmp.path().join("correlated.dmbn");
-    let (header, stdout) = calibrate("correlation", &out);
+    let (header, stdout) = calibrate("correlation", &out, &[]);
     assert!(stdout.contains("16 steps of 8 sequences"), "{stdout}");
+    assert!(stdout.contains("region 1: 8 steps"), "{stdout}");
     assert_eq!(header.joint_sigma_scales(), before.joint_sigma_scales());
     let d = header.config.joint_count();
     let r = header.joint_correlation().unwrap().expect("a correlation");
-    assert_eq!(r.values().len(), d * d);
-    assert!(r
-        .values()
-        .iter()
-        .enumerate()
-        .any(|(k, v)| k / d != k % d && v.abs() > 0.3));
+    assert_eq!((r.regions(), r.values().len()), (2, 2 * d * d));
+    assert_eq!(
+        header.joint_correlation_centres.as_ref().unwrap().len(),
+        2 * d
+    );
+    for region in 0..2 {
+        let values = r.region_values(region);
+        assert!((values.iter().enumerate()).any(|(k, v)| k / d != k % d && v.abs() > 0.3));
+    }
+    // Pooled (`--regions 1`): one R, no centres.
+    let (pooled, _) = calibrate(
+        "correlation",
+        &tmp.path().join("pooled.dmbn"),
+        &["--regions", "1"],
+    );
+    let one = pooled.joint_correlation().unwrap().unwrap();
+    assert_eq!((one.regions(), pooled.joint_correlation_centres), (1, None));
+    let run = Command::new(env!("CARGO_BIN_EXE_dmbn"))
+        .args(["calibrate", "--regions", "0", "--fit", "correlation"])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(
+        !run.status.success() && stderr.contains("--regions"),
+        "{stderr}"
+    );
     // The σ scales alone keep the file's correlation.
-    let (sigma, _) = calibrate("sigma", &tmp.path().join("sigma.dmbn"));
+    let (sigma, _) = calibrate("sigma", &tmp.path().join("sigma.dmbn"), &[]);
     assert_eq!(sigma.joint_correlation, before.joint_correlation);
     assert_ne!(sigma.joint_sigma_scales(), before.joint_sigma_scales());
     // A file whose correlation is not one is refused, naming the field.
     let bytes = std::fs::read(&out).unwrap();
-    for bad in [
-        serde_json::json!([1.0, 2.0]),
-        serde_json::json!(vec![1.5f32; d * d]),
-    ] {
-        let err = Predictor::from_bytes(&support::with_header_field(
-            &bytes,
+    for (field, bad) in [
+        ("joint_correlation", serde_json::json!([1.0, 2.0])),
+        (
             "joint_correlation",
-            bad,
-        ))
-        .unwrap_err();
-        assert!(err.to_string().contains("joint_correlation"), "{err}");
+            serde_json::json!(vec![1.5f32; 2 * d * d]),
+        ),
+        ("joint_correlation_centres", serde_json::json!([0.0, 1.0])),
+    ] {
+        let err =
+            Predictor::from_bytes(&support::with_header_field(&bytes, field, bad)).unwrap_err();
+        assert!(err.to_string().contains(field), "{err}");
     }
     // `--joints independent` draws other futures than the file's correlation.
     let sample = |joints: &str, dir: &str| {

@@ -73,6 +73,7 @@ pub fn draw_futures_from(
         (_, correlation) => correlation,
     };
     let grid = grid(target_times, sampling.grid);
+    let end = grid.iter().copied().fold(f32::NEG_INFINITY, f32::max);
     let components = sampling.components.unwrap_or(usize::MAX);
     let times = sampling.bootstrap.then(|| observed.observed_times());
     let mut first = Vec::new();
@@ -96,14 +97,22 @@ pub fn draw_futures_from(
                 None => &mut first,
             };
             let (contexts, steps) =
-                condition_on_steps(predictor, &seen, &order, blend, first, |_, mean, sigma| {
+                condition_on_steps(predictor, &seen, &order, blend, first, |k, mean, sigma| {
                     let eps: Vec<f32> = mean.iter().map(|_| standard_normal(&mut rng)).collect();
                     let eps = match correlation {
-                        Some(r) => r.correlate(&eps, components),
+                        Some(r) => {
+                            let pose = predictor.normalization().normalize(mean);
+                            r.correlate(&pose, &eps, components)
+                        }
                         None => eps,
                     };
+                    // The future's end (the last target) drawn at its own τ.
+                    let tau = match order[k] == end {
+                        true => sampling.end_temperature,
+                        false => sampling.temperature,
+                    };
                     let draw = mean.iter().zip(sigma).zip(eps);
-                    (draw.map(|((m, s), e)| m + sampling.temperature * s * e)).collect()
+                    (draw.map(|((m, s), e)| m + tau * s * e)).collect()
                 })?;
             // A candidate's contexts are rebuilt from its steps if it is kept: K × S of them
             // would hold K × S copies of every observed frame.
@@ -237,11 +246,21 @@ fn with_steps(
     Ok(contexts)
 }
 
+/// One drawn step's row for [`drawn_step_errors`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct DrawnStepError {
+    /// The standardised error, (truth − μ) / σ, of each joint value.
+    pub error: Vec<f32>,
+    /// The mean it is an error from, normalised: where the correlation's regions lie.
+    pub pose: Vec<f32>,
+}
+
 /// The standardised errors, (truth − μ) / σ, of `seq`'s joints at the grid of its `imagined`
 /// steps (increasing) that autoregressive sampling with `grid` steps, left to right, would
 /// draw from its `observed` steps, each step conditioned on the truth at the ones before it
 /// (the conditionals a draw takes): what [`crate::model::JointCorrelation::fit`] fits on
-/// (`dmbn calibrate`). One row per grid step.
+/// (`dmbn calibrate`), each with the mean it is an error from, normalised (where the
+/// correlation's regions lie). One row per grid step.
 pub fn drawn_step_errors(
     predictor: &Predictor,
     seq: &Sequence,
@@ -249,7 +268,7 @@ pub fn drawn_step_errors(
     imagined: &[usize],
     blend: f32,
     grid_size: usize,
-) -> Result<Vec<Vec<f32>>, ModelError> {
+) -> Result<Vec<DrawnStepError>, ModelError> {
     let observed = predictor.encode_contexts(&Observations::from_sequence(seq, observed)?)?;
     let times = seq.times();
     let at: Vec<f32> = imagined.iter().map(|&k| times[k]).collect();
@@ -267,7 +286,10 @@ pub fn drawn_step_errors(
         &mut Vec::new(),
         |k, mean, sigma| {
             let error = (truth[k].iter().zip(mean).zip(sigma)).map(|((y, m), s)| (y - m) / s);
-            errors.push(error.collect());
+            errors.push(DrawnStepError {
+                error: error.collect(),
+                pose: predictor.normalization().normalize(mean),
+            });
             truth[k].to_vec()
         },
     )?;

@@ -20,7 +20,7 @@ mod sampling;
 
 pub use autoregressive::{
     draw_futures, draw_futures_from, draw_unobserved, drawn_step_errors, frames_at,
-    sample_trajectories, sample_unobserved, score_futures, trajectories, Future,
+    sample_trajectories, sample_unobserved, score_futures, trajectories, DrawnStepError, Future,
 };
 pub use energy_score::{EnergyScore, FutureScoreRow, FutureScoreSums, FutureScores};
 pub use representatives::representatives;

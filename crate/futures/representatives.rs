@@ -1,7 +1,8 @@
-/// The indices (increasing) of `k` representatives of `points` (rows of one length): k-means
-/// from a farthest-first start (the point nearest the mean first), each cluster's member
-/// nearest its centroid. Where S futures should together cover what may happen, S independent
-/// draws clump (two alike, a likely outcome missed); S representatives of N ≥ S draws spread
+use crate::model::k_means::{as_f64, distance, nearest, KMeans};
+
+/// The indices (increasing) of `k` representatives of `points` (rows of one length): their
+/// k-means clusters ([`KMeans`]), each cluster's member nearest its centroid. Where S futures
+/// should together cover what may happen, S independent draws clump (two alike, a likely outcome missed); S representatives of N ≥ S draws spread
 /// over them as the draws' mass does, each still one of the draws (coherent, performable).
 /// Deterministic: the same indices natively and in wasm. All of them when `k` ≥ their number.
 pub fn representatives(points: &[Vec<f32>], k: usize) -> Vec<usize> {
@@ -12,58 +13,7 @@ pub fn representatives(points: &[Vec<f32>], k: usize) -> Vec<usize> {
     if k == 0 {
         return Vec::new();
     }
-    let dim = points[0].len();
-    let distance = |a: &[f64], b: &[f32]| -> f64 {
-        a.iter().zip(b).map(|(x, &y)| (x - y as f64).powi(2)).sum()
-    };
-    let as_f64 = |p: &[f32]| p.iter().map(|&v| v as f64).collect::<Vec<_>>();
-    let mean: Vec<f64> = (0..dim)
-        .map(|j| points.iter().map(|p| p[j] as f64).sum::<f64>() / n as f64)
-        .collect();
-    let nearest = |centre: &[f64]| {
-        (0..n)
-            .min_by(|&a, &b| distance(centre, &points[a]).total_cmp(&distance(centre, &points[b])))
-            .unwrap_or(0)
-    };
-    // Farthest-first: each next centre the point farthest from the centres so far.
-    let mut centres = vec![as_f64(&points[nearest(&mean)])];
-    let mut gap: Vec<f64> = points.iter().map(|p| distance(&centres[0], p)).collect();
-    while centres.len() < k {
-        let far = (0..n)
-            .max_by(|&a, &b| gap[a].total_cmp(&gap[b]))
-            .unwrap_or(0);
-        centres.push(as_f64(&points[far]));
-        for (g, p) in gap.iter_mut().zip(points) {
-            *g = g.min(distance(centres.last().unwrap(), p));
-        }
-    }
-    // Lloyd's iterations until no point changes cluster.
-    let mut cluster = vec![usize::MAX; n];
-    for _ in 0..100 {
-        let assign = |p: &[f32]| {
-            (0..k)
-                .min_by(|&a, &b| distance(&centres[a], p).total_cmp(&distance(&centres[b], p)))
-                .unwrap_or(0)
-        };
-        let next: Vec<usize> = points.iter().map(|p| assign(p)).collect();
-        if next == cluster {
-            break;
-        }
-        cluster = next;
-        for (c, centre) in centres.iter_mut().enumerate() {
-            let members: Vec<&Vec<f32>> = (points.iter().zip(&cluster))
-                .filter(|(_, &m)| m == c)
-                .map(|(p, _)| p)
-                .collect();
-            if !members.is_empty() {
-                *centre = (0..dim)
-                    .map(|j| {
-                        members.iter().map(|p| p[j] as f64).sum::<f64>() / members.len() as f64
-                    })
-                    .collect();
-            }
-        }
-    }
+    let KMeans { centres, cluster } = KMeans::fit(points, k);
     // Each cluster's member nearest its centre (an empty cluster keeps its start point).
     let mut chosen: Vec<usize> = (0..k)
         .map(|c| {
@@ -72,7 +22,7 @@ pub fn representatives(points: &[Vec<f32>], k: usize) -> Vec<usize> {
                 .min_by(|&a, &b| {
                     distance(&centres[c], &points[a]).total_cmp(&distance(&centres[c], &points[b]))
                 })
-                .unwrap_or_else(|| nearest(&centres[c]))
+                .unwrap_or_else(|| nearest(points, &centres[c]))
         })
         .collect();
     chosen.sort_unstable();

@@ -168,6 +168,10 @@ pub struct Sampling {
     /// τ: each step (or the latent z) is drawn from N(μ, (τσ)²); below 1 the futures keep
     /// nearer the mean.
     pub temperature: f32,
+    /// τ at an autoregressive future's end (its last target step), where what the
+    /// observations leave open lies (how far a push goes, where a carry ends); the steps
+    /// before it only shape the path there.
+    pub end_temperature: f32,
     /// Seeds the draws: the same seed, the same futures, natively and in wasm.
     pub seed: u64,
 }
@@ -177,8 +181,10 @@ pub struct Sampling {
 /// results.md, *Many futures*): 2 steps drawn (1, 3, 4 and 8 covered fewer demonstrations),
 /// left to right (random orders covered fewer), correlated joints along their 3 leading
 /// principal directions with τ 0.7, each future from a bootstrap resample of the
-/// observations, the joint stage between the drawn steps, the representatives of 4 × S
-/// (docs/results.md has the figures, from four design sets).
+/// observations, the joint stage between the drawn steps, the future's end at τ 1 (with a
+/// joint correlation per action, a wider end keeps a carry's height and covers more of both
+/// actions), the representatives of 4 × S (docs/results.md has the figures, from four
+/// design sets).
 impl Default for Sampling {
     fn default() -> Self {
         Sampling {
@@ -192,6 +198,7 @@ impl Default for Sampling {
             stage: true,
             oversample: 4,
             temperature: 0.7,
+            end_temperature: 1.0,
             seed: 0,
         }
     }
@@ -216,7 +223,7 @@ impl Sampling {
     }
 
     /// How the futures are drawn, in words (the reports' headings): "latent path, τ 1, seed
-    /// 0", "2 steps drawn, left-to-right, τ 0.7, seed 0", or for `auto` both.
+    /// 0", "2 steps drawn, left-to-right, τ 0.7, at the end 1, seed 0", or for `auto` both.
     pub fn describe(&self) -> String {
         let joints = match self.joints {
             JointDraws::Auto => "joints correlated where the file says",
@@ -242,7 +249,14 @@ impl Sampling {
             Method::Ar => ar,
             Method::Auto => format!("a model's latent path, or without one {ar}"),
         };
-        format!("{how}, τ {}, seed {}", self.temperature, self.seed)
+        let tau = match self.method {
+            Method::Latent => format!("τ {}", self.temperature),
+            _ => format!(
+                "τ {}, at the end {}",
+                self.temperature, self.end_temperature
+            ),
+        };
+        format!("{how}, {tau}, seed {}", self.seed)
     }
 
     /// The same sampling without representatives: S futures as drawn (what the energy score
@@ -288,14 +302,16 @@ impl Sampling {
                 ),
             ));
         }
-        if !(self.temperature.is_finite() && (0.0..=4.0).contains(&self.temperature)) {
-            return Err(ModelError::observation(
-                "temperature",
-                format!(
-                    "is {}: expected a factor on σ from 0 to 4",
-                    self.temperature
-                ),
-            ));
+        for (field, tau) in [
+            ("temperature", self.temperature),
+            ("end_temperature", self.end_temperature),
+        ] {
+            if !(tau.is_finite() && (0.0..=4.0).contains(&tau)) {
+                return Err(ModelError::observation(
+                    field,
+                    format!("is {tau}: expected a factor on σ from 0 to 4"),
+                ));
+            }
         }
         if !(1..=Self::MAX_OVERSAMPLE).contains(&self.oversample) {
             return Err(ModelError::observation(

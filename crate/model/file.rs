@@ -80,6 +80,10 @@ pub struct ModelHeader {
     /// each joint drawn on its own.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub joint_correlation: Option<Vec<f32>>,
+    /// Where the file holds K > 1 regions' R (`joint_correlation`: K × D × D), their centres,
+    /// K × D normalised joint values: a draw takes the R whose centre is nearest its mean.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub joint_correlation_centres: Option<Vec<f32>>,
     /// The weight section.
     pub weights: WeightsInfo,
 }
@@ -96,8 +100,11 @@ impl ModelHeader {
     /// The file's [`JointCorrelation`], if it holds one (checked when the file is read).
     pub fn joint_correlation(&self) -> Result<Option<JointCorrelation>, ModelError> {
         let joints = self.config.joint_count();
+        let centres = self.joint_correlation_centres.clone();
         (self.joint_correlation.clone())
-            .map(|values| JointCorrelation::new("joint_correlation", values, joints))
+            .map(|values| {
+                JointCorrelation::with_regions("joint_correlation", values, centres, joints)
+            })
             .transpose()
     }
 }
@@ -127,6 +134,7 @@ pub fn save_bytes(
         joint_sigma_scale: None,
         forecast_joint_sigma_scale: None,
         joint_correlation: None,
+        joint_correlation_centres: None,
         weights: WeightsInfo {
             format: "burnpack".into(),
             dtype: if half {
@@ -161,7 +169,8 @@ pub fn with_joint_correlation(
     correlation: Option<&JointCorrelation>,
 ) -> Result<Vec<u8>, ModelError> {
     let (mut header, weights) = split(bytes)?;
-    header.joint_correlation = correlation.map(|r| r.values().to_vec());
+    header.joint_correlation = correlation.map(|r| r.values());
+    header.joint_correlation_centres = correlation.and_then(|r| r.centres());
     header.joint_correlation()?;
     assemble(&header, weights)
 }

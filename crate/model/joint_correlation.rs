@@ -1,3 +1,4 @@
+use super::k_means::{nearest_centre, KMeans};
 use super::ModelError;
 
 /// How the errors of one step's joint values go together: the correlation of the model's
@@ -11,9 +12,25 @@ use super::ModelError;
 /// ([`JointCorrelation::correlate`]): where what is left open is a push's length or a carry's
 /// spot, the errors' variation lies mostly along a few directions, and the rest is the
 /// network's noise, which spoils a performed action.
+///
+/// A file may hold one R per **region** of the poses its futures reach (`dmbn calibrate
+/// --regions K`): the same joint errors mean different motions in different poses (a push's
+/// length along the table, a held object's carry at its height), so one R pooled over both
+/// moves the arm in directions neither takes (a carried object drawn higher or lower). Each
+/// region is a k-means cluster of the predicted means, normalised, at the steps it was fitted
+/// on; a draw takes the R of the region whose centre is nearest the mean it is drawn around.
 #[derive(Debug, Clone, PartialEq)]
 pub struct JointCorrelation {
     joints: usize,
+    regions: Vec<Region>,
+}
+
+/// One region's R.
+#[derive(Debug, Clone, PartialEq)]
+struct Region {
+    /// The mean pose (normalised joint values) of the steps it was fitted on; empty where the
+    /// file holds one R.
+    centre: Vec<f32>,
     /// R, row-major `[D, D]`.
     values: Vec<f32>,
     /// R's principal factor, row-major `[D, D]`: column c is √λ_c v_c, the c-th largest
@@ -25,32 +42,196 @@ impl JointCorrelation {
     /// Off-diagonal values are shrunk towards 0 by this share when fitted, so that R stays
     /// positive definite where errors move together exactly (a joint that mirrors another).
     pub const SHRINKAGE: f64 = 0.01;
+    /// At most this many regions.
+    pub const MAX_REGIONS: usize = 16;
     /// How far from symmetric, or from a unit diagonal, a stored R may be (rounding).
     const TOLERANCE: f32 = 1e-4;
 
-    /// R as stored (row-major, `joints` × `joints`): fails, naming `field`, unless it is a
-    /// finite symmetric matrix of that size with a unit diagonal and positive definite.
+    /// One R as stored (row-major, `joints` × `joints`): fails, naming `field`, unless it is
+    /// a finite symmetric matrix of that size with a unit diagonal and positive definite.
     pub fn new(field: &str, values: Vec<f32>, joints: usize) -> Result<Self, ModelError> {
+        Self::with_regions(field, values, None, joints)
+    }
+
+    /// K regions' R as stored (`values`: K × D × D, row-major) with their `centres` (K × D;
+    /// needed where K > 1, and then finite): fails, naming `field`, unless each R is a
+    /// correlation matrix as [`JointCorrelation::new`] checks.
+    pub fn with_regions(
+        field: &str,
+        values: Vec<f32>,
+        centres: Option<Vec<f32>>,
+        joints: usize,
+    ) -> Result<Self, ModelError> {
         let bad = |what: String| ModelError::Header(format!("{field} {what}"));
-        if values.len() != joints * joints {
+        let per = joints * joints;
+        let k = values.len().checked_div(per).unwrap_or(0);
+        if k == 0 || k * per != values.len() || k > Self::MAX_REGIONS {
             return Err(bad(format!(
-                "holds {} values: expected {joints} × {joints} (one row per joint value)",
-                values.len()
+                "holds {} values: expected {joints} × {joints} (one row per joint value), or that for each of 1 to {} regions",
+                values.len(),
+                Self::MAX_REGIONS
             )));
         }
+        let centres = match (k, centres) {
+            (1, None) => vec![Vec::new()],
+            (_, Some(c)) if c.len() == k * joints && c.iter().all(|v| v.is_finite()) => {
+                c.chunks(joints).map(<[f32]>::to_vec).collect()
+            }
+            (_, c) => {
+                return Err(ModelError::Header(format!(
+                    "{field}_centres hold {}: expected {k} × {joints} finite values (a centre for each of its {k} regions)",
+                    c.map_or("nothing".to_string(), |c| format!("{} values", c.len()))
+                )))
+            }
+        };
+        let regions = (values.chunks(per).zip(centres))
+            .enumerate()
+            .map(|(r, (values, centre))| {
+                let field = if k == 1 {
+                    field.to_string()
+                } else {
+                    format!("{field} (region {r})")
+                };
+                Region::new(&field, values.to_vec(), centre, joints)
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(JointCorrelation { joints, regions })
+    }
+
+    /// The correlation of `errors` (rows of D standardised errors), shrunk by
+    /// [`JointCorrelation::SHRINKAGE`]; a joint whose errors do not vary is uncorrelated.
+    /// `None` with fewer than 2 rows.
+    pub fn fit(errors: &[Vec<f32>], joints: usize) -> Option<Self> {
+        let values = fit_values(errors, joints)?;
+        JointCorrelation::new("the fitted correlation", values, joints).ok()
+    }
+
+    /// One R per region: the `regions` k-means clusters of `poses` (each error's predicted
+    /// mean, normalised), R fitted on each cluster's errors as [`JointCorrelation::fit`].
+    /// `None` where a cluster has fewer than 2 rows (or `regions` is 0 or above
+    /// [`JointCorrelation::MAX_REGIONS`]).
+    pub fn fit_regions(
+        errors: &[Vec<f32>],
+        poses: &[Vec<f32>],
+        joints: usize,
+        regions: usize,
+    ) -> Option<Self> {
+        if !(1..=Self::MAX_REGIONS.min(poses.len())).contains(&regions) {
+            return None;
+        }
+        Self::fit_labelled(errors, poses, &KMeans::fit(poses, regions).cluster, joints)
+    }
+
+    /// One R per label (`labels[i]` from 0 to K − 1, say the action each error comes from),
+    /// each region's centre the mean of its `poses`: a draw takes the R of the label whose
+    /// mean pose is nearest its own. `None` where a label has fewer than 2 rows, the lengths
+    /// differ, or K is above [`JointCorrelation::MAX_REGIONS`].
+    pub fn fit_labelled(
+        errors: &[Vec<f32>],
+        poses: &[Vec<f32>],
+        labels: &[usize],
+        joints: usize,
+    ) -> Option<Self> {
+        let k = labels.iter().max()? + 1;
+        if poses.len() != errors.len() || labels.len() != errors.len() || k > Self::MAX_REGIONS {
+            return None;
+        }
+        if k == 1 {
+            return Self::fit(errors, joints);
+        }
+        let (mut values, mut centres) = (Vec::new(), Vec::new());
+        for c in 0..k {
+            let members: Vec<usize> = (0..errors.len()).filter(|&i| labels[i] == c).collect();
+            let rows: Vec<Vec<f32>> = members.iter().map(|&i| errors[i].clone()).collect();
+            values.extend(fit_values(&rows, joints)?);
+            centres.extend((0..joints).map(|j| {
+                let sum: f64 = members.iter().map(|&i| poses[i][j] as f64).sum();
+                (sum / members.len() as f64) as f32
+            }));
+        }
+        Self::with_regions("the fitted correlation", values, Some(centres), joints).ok()
+    }
+
+    /// D: joint values a step.
+    pub fn joints(&self) -> usize {
+        self.joints
+    }
+
+    /// K: regions, each with its own R (1: one R everywhere).
+    pub fn regions(&self) -> usize {
+        self.regions.len()
+    }
+
+    /// Every region's R, row-major K × D × D (the model file's `joint_correlation`).
+    pub fn values(&self) -> Vec<f32> {
+        (self.regions.iter())
+            .flat_map(|r| r.values.iter().copied())
+            .collect()
+    }
+
+    /// R of region `r`, row-major D × D.
+    pub fn region_values(&self, r: usize) -> &[f32] {
+        &self.regions[r].values
+    }
+
+    /// The regions' centres, K × D (the model file's `joint_correlation_centres`); `None`
+    /// with one region.
+    pub fn centres(&self) -> Option<Vec<f32>> {
+        (self.regions.len() > 1).then(|| {
+            (self.regions.iter())
+                .flat_map(|r| r.centre.iter().copied())
+                .collect()
+        })
+    }
+
+    /// The region a draw around `pose` (normalised joint values) takes: the one whose centre
+    /// is nearest.
+    pub fn region_of(&self, pose: &[f32]) -> usize {
+        if self.regions.len() == 1 {
+            return 0;
+        }
+        let centres: Vec<Vec<f64>> = (self.regions.iter())
+            .map(|r| r.centre.iter().map(|&v| v as f64).collect())
+            .collect();
+        nearest_centre(&centres, pose)
+    }
+
+    /// D independent standard normal draws `eps` made to vary together as R of the region of
+    /// `pose` says ([`JointCorrelation::region_of`]), along its `components` leading
+    /// principal directions (Σ_c √λ_c v_c ε_c over c < C; all D: the draws' correlation is R;
+    /// fewer: the rest of the variation is left out). `eps[c]` drives direction c, so the same
+    /// draws with fewer components are the same futures, pruned.
+    pub fn correlate(&self, pose: &[f32], eps: &[f32], components: usize) -> Vec<f32> {
+        let d = self.joints;
+        let kept = components.min(d);
+        let principal = &self.regions[self.region_of(pose)].principal;
+        (0..d)
+            .map(|i| (0..kept).map(|c| principal[i * d + c] * eps[c]).sum())
+            .collect()
+    }
+}
+
+impl Region {
+    fn new(
+        field: &str,
+        values: Vec<f32>,
+        centre: Vec<f32>,
+        joints: usize,
+    ) -> Result<Self, ModelError> {
+        let bad = |what: String| ModelError::Header(format!("{field} {what}"));
         for i in 0..joints {
             for j in 0..joints {
                 let r = values[i * joints + j];
-                if !r.is_finite() || r.abs() > 1.0 + Self::TOLERANCE {
+                if !r.is_finite() || r.abs() > 1.0 + JointCorrelation::TOLERANCE {
                     return Err(bad(format!(
                         "[{i}][{j}] is {r}: expected a correlation, from -1 to 1"
                     )));
                 }
-                if (r - values[j * joints + i]).abs() > Self::TOLERANCE {
+                if (r - values[j * joints + i]).abs() > JointCorrelation::TOLERANCE {
                     return Err(bad(format!("is not symmetric at [{i}][{j}]")));
                 }
             }
-            if (values[i * joints + i] - 1.0).abs() > Self::TOLERANCE {
+            if (values[i * joints + i] - 1.0).abs() > JointCorrelation::TOLERANCE {
                 return Err(bad(format!(
                     "[{i}][{i}] is {}: expected 1 on the diagonal",
                     values[i * joints + i]
@@ -69,72 +250,49 @@ impl JointCorrelation {
                 principal[i * joints + c] = (lambda.sqrt() * v) as f32;
             }
         }
-        Ok(JointCorrelation {
-            joints,
+        Ok(Region {
+            centre,
             values,
             principal,
         })
     }
+}
 
-    /// The correlation of `errors` (rows of D standardised errors), shrunk by
-    /// [`JointCorrelation::SHRINKAGE`]; a joint whose errors do not vary is uncorrelated.
-    /// `None` with fewer than 2 rows.
-    pub fn fit(errors: &[Vec<f32>], joints: usize) -> Option<Self> {
-        let n = errors.len();
-        if n < 2 || errors.iter().any(|row| row.len() != joints) {
-            return None;
-        }
-        let mean: Vec<f64> = (0..joints)
-            .map(|j| errors.iter().map(|row| row[j] as f64).sum::<f64>() / n as f64)
-            .collect();
-        let mut covariance = vec![0.0f64; joints * joints];
-        for row in errors {
-            for i in 0..joints {
-                for j in 0..joints {
-                    covariance[i * joints + j] +=
-                        (row[i] as f64 - mean[i]) * (row[j] as f64 - mean[j]);
-                }
+/// R of `errors` (row-major D × D), shrunk by [`JointCorrelation::SHRINKAGE`]; `None` with
+/// fewer than 2 rows or a row of another length.
+fn fit_values(errors: &[Vec<f32>], joints: usize) -> Option<Vec<f32>> {
+    let n = errors.len();
+    if n < 2 || errors.iter().any(|row| row.len() != joints) {
+        return None;
+    }
+    let mean: Vec<f64> = (0..joints)
+        .map(|j| errors.iter().map(|row| row[j] as f64).sum::<f64>() / n as f64)
+        .collect();
+    let mut covariance = vec![0.0f64; joints * joints];
+    for row in errors {
+        for i in 0..joints {
+            for j in 0..joints {
+                covariance[i * joints + j] += (row[i] as f64 - mean[i]) * (row[j] as f64 - mean[j]);
             }
         }
-        let sd: Vec<f64> = (0..joints)
-            .map(|i| covariance[i * joints + i].sqrt())
-            .collect();
-        let values = (0..joints * joints)
+    }
+    let sd: Vec<f64> = (0..joints)
+        .map(|i| covariance[i * joints + i].sqrt())
+        .collect();
+    Some(
+        (0..joints * joints)
             .map(|k| {
                 let (i, j) = (k / joints, k % joints);
                 if i == j {
                     1.0
                 } else if sd[i] > 1e-12 && sd[j] > 1e-12 {
-                    ((1.0 - Self::SHRINKAGE) * covariance[k] / (sd[i] * sd[j])) as f32
+                    ((1.0 - JointCorrelation::SHRINKAGE) * covariance[k] / (sd[i] * sd[j])) as f32
                 } else {
                     0.0
                 }
             })
-            .collect();
-        JointCorrelation::new("the fitted correlation", values, joints).ok()
-    }
-
-    /// D: joint values a step.
-    pub fn joints(&self) -> usize {
-        self.joints
-    }
-
-    /// R, row-major (the model file's `joint_correlation`).
-    pub fn values(&self) -> &[f32] {
-        &self.values
-    }
-
-    /// D independent standard normal draws `eps` made to vary together as R says, along its
-    /// `components` leading principal directions (Σ_c √λ_c v_c ε_c over c < C; all D: the
-    /// draws' correlation is R; fewer: the rest of the variation is left out). `eps[c]` drives
-    /// direction c, so the same draws with fewer components are the same futures, pruned.
-    pub fn correlate(&self, eps: &[f32], components: usize) -> Vec<f32> {
-        let d = self.joints;
-        let kept = components.min(d);
-        (0..d)
-            .map(|i| (0..kept).map(|c| self.principal[i * d + c] * eps[c]).sum())
-            .collect()
-    }
+            .collect(),
+    )
 }
 
 /// The eigenvalues and unit eigenvectors of the symmetric `d` × `d` matrix `a`, largest first
@@ -216,7 +374,7 @@ mod tests {
         assert!(v[2] < -0.98, "{v:?}");
         assert_eq!((v[3], v[15]), (0.0, 1.0));
         // The principal factor times its transpose is R.
-        let l = &r.principal;
+        let l = &r.regions[0].principal;
         for i in 0..4 {
             for j in 0..4 {
                 let llt: f32 = (0..4).map(|k| l[i * 4 + k] * l[j * 4 + k]).sum();
@@ -225,11 +383,49 @@ mod tests {
         }
         // The leading direction moves the first three together (the third against), the
         // fourth not at all: the first and the third go against each other.
-        let x = r.correlate(&[1.0, 0.0, 0.0, 0.0], 4);
+        let x = r.correlate(&[], &[1.0, 0.0, 0.0, 0.0], 4);
         assert!(x[0] * x[2] < 0.0 && x[3].abs() < 1e-6, "{x:?}");
         assert!((x[0] + x[2]).abs() < 0.05 * x[0].abs(), "{x:?}");
         // One component: whatever the other draws, only the leading direction moves.
-        assert_eq!(r.correlate(&[1.0, 5.0, -3.0, 2.0], 1), x);
+        assert_eq!(r.correlate(&[], &[1.0, 5.0, -3.0, 2.0], 1), x);
+    }
+
+    #[test]
+    fn each_region_draws_with_its_own_correlation() {
+        // Two places the arm reaches: near pose [0, 0] the errors of the first two joints go
+        // together, near [5, 5] against each other. Pooled they cancel out; in regions each
+        // keeps its own.
+        let (mut errors, mut poses) = (Vec::new(), Vec::new());
+        for i in 0..400 {
+            let a = ((i * 37 % 101) as f32 / 50.0) - 1.0;
+            let b = ((i * 53 % 97) as f32 / 48.0) - 1.0;
+            let near = i % 2 == 0;
+            errors.push(vec![a, if near { a } else { -a } + 0.1 * b]);
+            let at = if near { 0.0 } else { 5.0 };
+            poses.push(vec![at + 0.01 * b, at]);
+        }
+        let pooled = JointCorrelation::fit(&errors, 2).unwrap();
+        assert!(pooled.values()[1].abs() < 0.2, "{:?}", pooled.values());
+        let r = JointCorrelation::fit_regions(&errors, &poses, 2, 2).unwrap();
+        assert_eq!(r.regions(), 2);
+        let (near, far) = (r.region_of(&[0.2, 0.1]), r.region_of(&[4.0, 6.0]));
+        assert_ne!(near, far);
+        assert!(r.region_values(near)[1] > 0.95 && r.region_values(far)[1] < -0.95);
+        let x = r.correlate(&[0.0, 0.0], &[1.0, 0.0], 1);
+        let y = r.correlate(&[5.0, 5.0], &[1.0, 0.0], 1);
+        assert!(x[0] * x[1] > 0.0 && y[0] * y[1] < 0.0, "{x:?} {y:?}");
+        // Stored and read back: the same regions, the same draws.
+        let centres = r.centres().unwrap();
+        assert_eq!(centres.len(), 4);
+        let back = JointCorrelation::with_regions("r", r.values(), Some(centres), 2).unwrap();
+        assert_eq!(back, r);
+        // Too few rows for a region, or no centres for several: refused.
+        assert!(JointCorrelation::fit_regions(&errors[..3], &poses[..3], 2, 4).is_none());
+        let err = JointCorrelation::with_regions("joint_correlation", r.values(), None, 2);
+        assert!(err
+            .unwrap_err()
+            .to_string()
+            .contains("expected 2 × 2 finite values"));
     }
 
     #[test]

@@ -33,6 +33,7 @@ mod joint_encoder;
 mod joint_sigma_scale;
 mod joint_stage;
 mod joint_stage_inputs;
+pub mod k_means;
 mod kernels;
 mod latent_path;
 mod loss;

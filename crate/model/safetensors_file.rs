@@ -42,9 +42,13 @@ pub struct SafetensorsHeader {
     /// The model file's factor on the joint σ outside the observed times' span, if any.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub forecast_joint_sigma_scale: Option<f32>,
-    /// The model file's joint correlation for sampled futures, if any (row-major D × D).
+    /// The model file's joint correlation for sampled futures, if any (row-major D × D, or
+    /// K × D × D for K regions).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub joint_correlation: Option<Vec<f32>>,
+    /// Its regions' centres where it holds several (K × D normalised joint values).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub joint_correlation_centres: Option<Vec<f32>>,
 }
 
 /// The model file in `model_file` as safetensors bytes, f32 (or f16 when `half`).
@@ -57,6 +61,7 @@ pub fn export_safetensors(model_file: &[u8], half: bool) -> Result<Vec<u8>, Mode
         joint_sigma_scale: file.joint_sigma_scale,
         forecast_joint_sigma_scale: file.forecast_joint_sigma_scale,
         joint_correlation: file.joint_correlation,
+        joint_correlation_centres: file.joint_correlation_centres,
     };
     let header = serde_json::to_string(&header)
         .map_err(|e| ModelError::Header(format!("cannot write the metadata: {e}")))?;
@@ -128,7 +133,9 @@ pub fn import_safetensors(bytes: &[u8], half: bool) -> Result<Vec<u8>, ModelErro
     match header.joint_correlation {
         Some(values) => {
             let joints = header.config.joint_count();
-            let correlation = JointCorrelation::new("joint_correlation", values, joints)?;
+            let centres = header.joint_correlation_centres;
+            let correlation =
+                JointCorrelation::with_regions("joint_correlation", values, centres, joints)?;
             super::with_joint_correlation(&bytes, Some(&correlation))
         }
         None => Ok(bytes),

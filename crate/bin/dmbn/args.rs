@@ -188,6 +188,10 @@ pub struct SamplingArgs {
     /// τ: each drawn step's σ is multiplied by this (below 1: futures nearer the mean).
     #[arg(long, default_value_t = Sampling::default().temperature)]
     pub temperature: f32,
+    /// τ at an autoregressive future's end (its last drawn step): where what the observations
+    /// leave open lies, drawn wider than the path there.
+    #[arg(long, default_value_t = Sampling::default().end_temperature)]
+    pub end_temperature: f32,
     /// Seeds the draws (the same seed, the same futures; `score` and `imitate` draw sequence
     /// i's, or demonstration id i's, from seed + i).
     #[arg(long, default_value_t = 0)]
@@ -208,6 +212,7 @@ impl SamplingArgs {
             stage: self.stage,
             oversample: self.oversample,
             temperature: self.temperature,
+            end_temperature: self.end_temperature,
             seed: self.seed,
         }
     }

@@ -44,9 +44,36 @@ pub struct CalibrateArgs {
     /// both. What is not fitted is kept as the file has it.
     #[arg(long, value_enum, default_value_t = Fit::Both)]
     fit: Fit,
+    /// Where the joint correlation is fitted per region of the poses the futures' drawn steps
+    /// reach, so that a draw moves the arm as the demonstrations do there (a push along the
+    /// table, a carry at its height): `actions`, a region per action folder (a draw takes the
+    /// action's whose mean pose is nearest its own); K, the K k-means clusters of the poses;
+    /// 1, one correlation pooled over all of them.
+    #[arg(long, default_value = "actions", value_parser = parse_regions)]
+    regions: Regions,
     /// Where to write the calibrated model file (the same weights, the scale in its header).
     #[arg(long)]
     out: PathBuf,
+}
+
+/// `--regions`: the joint correlation's regions.
+#[derive(Clone, Copy, PartialEq, Debug)]
+enum Regions {
+    Actions,
+    Clusters(usize),
+}
+
+fn parse_regions(s: &str) -> Result<Regions, String> {
+    match s {
+        "actions" => Ok(Regions::Actions),
+        _ => match s.parse::<usize>() {
+            Ok(k) if (1..=JointCorrelation::MAX_REGIONS).contains(&k) => Ok(Regions::Clusters(k)),
+            _ => Err(format!(
+                "{s:?}: expected actions, or a count of regions from 1 to {}",
+                JointCorrelation::MAX_REGIONS
+            )),
+        },
+    }
 }
 
 #[derive(Clone, Copy, PartialEq, ValueEnum)]
@@ -161,7 +188,7 @@ fn fit_correlation(
     let size = predictor.model().image_size() as u32;
     let grid = Sampling::default().grid;
     let bar = progress(refs.len(), "fitting the joint correlation");
-    let mut errors = Vec::new();
+    let (mut errors, mut poses, mut actions) = (Vec::new(), Vec::new(), Vec::new());
     for r in refs {
         let seq = dataset.read(r, Some(size))?;
         let Some(steps) = Scenario::Extrap.steps(seq.len(), Scenario::EXTRAP_OBSERVATIONS) else {
@@ -171,35 +198,85 @@ fn fit_correlation(
             .filter(|k| !steps.observed.contains(k))
             .copied()
             .collect();
-        errors.extend(drawn_step_errors(
+        let rows = drawn_step_errors(
             predictor,
             &seq,
             &steps.observed,
             &imagined,
             args.blend,
             grid,
-        )?);
+        )?;
+        for row in rows {
+            errors.push(row.error);
+            poses.push(row.pose);
+            actions.push(r.action.as_str());
+        }
         bar.inc(1);
     }
     bar.finish_and_clear();
     let d = predictor.joint_count();
-    let correlation = JointCorrelation::fit(&errors, d).ok_or_else(|| {
+    let mut names: Vec<&str> = actions.clone();
+    names.sort_unstable();
+    names.dedup();
+    let fitted = match args.regions {
+        Regions::Actions => {
+            let labels: Vec<usize> = (actions.iter())
+                .map(|a| names.iter().position(|n| n == a).unwrap_or(0))
+                .collect();
+            JointCorrelation::fit_labelled(&errors, &poses, &labels, d)
+        }
+        Regions::Clusters(k) => JointCorrelation::fit_regions(&errors, &poses, d, k),
+    };
+    let correlation = fitted.ok_or_else(|| {
         CliError::Usage(format!(
-            "ids {a}-{b}: {} drawn steps to fit the joint correlation on: expected 2 or more",
-            errors.len()
+            "ids {a}-{b}: {} drawn steps to fit the joint correlation on, {}: expected 2 or more in each region (fewer --regions, or more ids)",
+            errors.len(),
+            match args.regions {
+                Regions::Actions => format!("a region per action ({})", names.join(", ")),
+                Regions::Clusters(k) => format!("in {k} regions"),
+            }
         ))
     })?;
-    let r = correlation.values();
-    let (i, j) = (0..d * d)
-        .filter(|k| k / d != k % d)
-        .max_by(|&x, &y| r[x].abs().total_cmp(&r[y].abs()))
-        .map_or((0, 0), |k| (k / d, k % d));
+    let k = correlation.regions();
+    // The strongest correlation of each region's R, and which actions each region holds:
+    // what the regions split (they know no labels).
+    let strongest = |r: &[f32]| {
+        let (i, j) = (0..d * d)
+            .filter(|k| k / d != k % d)
+            .max_by(|&x, &y| r[x].abs().total_cmp(&r[y].abs()))
+            .map_or((0, 0), |k| (k / d, k % d));
+        format!(
+            "strongest r = {:.2} (joint values {i} and {j})",
+            r[i * d + j]
+        )
+    };
     println!(
-        "joint correlation of sampled futures' drawn steps: {} steps of {} sequences on ids {a}-{b} ({grid} a future, blend {}); strongest r = {:.2} (joint values {i} and {j})",
+        "joint correlation of sampled futures' drawn steps: {} steps of {} sequences on ids {a}-{b} ({grid} a future, blend {}); {}",
         errors.len(),
         refs.len(),
         args.blend,
-        r[i * d + j]
+        match k {
+            1 => strongest(correlation.region_values(0)),
+            _ => format!("{k} regions"),
+        }
     );
+    for region in (0..k).filter(|_| k > 1) {
+        let mut count: Vec<(&str, usize)> = Vec::new();
+        for (pose, &action) in poses.iter().zip(&actions) {
+            if correlation.region_of(pose) == region {
+                match count.iter_mut().find(|(a, _)| *a == action) {
+                    Some((_, n)) => *n += 1,
+                    None => count.push((action, 1)),
+                }
+            }
+        }
+        let steps: usize = count.iter().map(|(_, n)| n).sum();
+        let count: Vec<String> = count.iter().map(|(a, n)| format!("{n} {a}")).collect();
+        println!(
+            "  region {region}: {steps} steps ({}); {}",
+            count.join(", "),
+            strongest(correlation.region_values(region))
+        );
+    }
     Ok(with_joint_correlation(bytes, Some(&correlation))?)
 }
