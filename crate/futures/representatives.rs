@@ -2,8 +2,9 @@ use crate::model::k_means::{as_f64, distance, nearest, KMeans};
 
 /// The indices (increasing) of `k` representatives of `points` (rows of one length): their
 /// k-means clusters ([`KMeans`]), each cluster's member nearest its centroid. Where S futures
-/// should together cover what may happen, S independent draws clump (two alike, a likely outcome missed); S representatives of N ≥ S draws spread
-/// over them as the draws' mass does, each still one of the draws (coherent, performable).
+/// should together cover what may happen, S independent draws clump (two alike, a likely
+/// outcome missed); S representatives of N ≥ S draws spread over them as the draws' mass
+/// does, each still one of the draws (coherent, performable).
 /// Deterministic: the same indices natively and in wasm. All of them when `k` ≥ their number.
 pub fn representatives(points: &[Vec<f32>], k: usize) -> Vec<usize> {
     let n = points.len();

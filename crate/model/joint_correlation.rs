@@ -14,11 +14,12 @@ use super::ModelError;
 /// network's noise, which spoils a performed action.
 ///
 /// A file may hold one R per **region** of the poses its futures reach (`dmbn calibrate
-/// --regions K`): the same joint errors mean different motions in different poses (a push's
+/// --regions`): the same joint errors mean different motions in different poses (a push's
 /// length along the table, a held object's carry at its height), so one R pooled over both
 /// moves the arm in directions neither takes (a carried object drawn higher or lower). Each
-/// region is a k-means cluster of the predicted means, normalised, at the steps it was fitted
-/// on; a draw takes the R of the region whose centre is nearest the mean it is drawn around.
+/// region is one action's drawn steps, or a k-means cluster of them, its centre their mean
+/// predicted pose (normalised); a draw takes the R of the region whose centre is nearest the
+/// mean it is drawn around.
 #[derive(Debug, Clone, PartialEq)]
 pub struct JointCorrelation {
     joints: usize,
@@ -28,9 +29,9 @@ pub struct JointCorrelation {
 /// One region's R.
 #[derive(Debug, Clone, PartialEq)]
 struct Region {
-    /// The mean pose (normalised joint values) of the steps it was fitted on; empty where the
-    /// file holds one R.
-    centre: Vec<f32>,
+    /// The mean pose (normalised joint values) of the steps it was fitted on, in f64 as the
+    /// distances to it are taken; empty where the file holds one R.
+    centre: Vec<f64>,
     /// R, row-major `[D, D]`.
     values: Vec<f32>,
     /// R's principal factor, row-major `[D, D]`: column c is √λ_c v_c, the c-th largest
@@ -179,7 +180,7 @@ impl JointCorrelation {
     pub fn centres(&self) -> Option<Vec<f32>> {
         (self.regions.len() > 1).then(|| {
             (self.regions.iter())
-                .flat_map(|r| r.centre.iter().copied())
+                .flat_map(|r| r.centre.iter().map(|&v| v as f32))
                 .collect()
         })
     }
@@ -187,13 +188,7 @@ impl JointCorrelation {
     /// The region a draw around `pose` (normalised joint values) takes: the one whose centre
     /// is nearest.
     pub fn region_of(&self, pose: &[f32]) -> usize {
-        if self.regions.len() == 1 {
-            return 0;
-        }
-        let centres: Vec<Vec<f64>> = (self.regions.iter())
-            .map(|r| r.centre.iter().map(|&v| v as f64).collect())
-            .collect();
-        nearest_centre(&centres, pose)
+        nearest_centre(self.regions.iter().map(|r| r.centre.as_slice()), pose)
     }
 
     /// D independent standard normal draws `eps` made to vary together as R of the region of
@@ -251,7 +246,7 @@ impl Region {
             }
         }
         Ok(Region {
-            centre,
+            centre: centre.iter().map(|&v| v as f64).collect(),
             values,
             principal,
         })

@@ -34,7 +34,9 @@ impl KMeans {
         }
         let mut cluster = vec![usize::MAX; n];
         for _ in 0..100 {
-            let next: Vec<usize> = points.iter().map(|p| nearest_centre(&centres, p)).collect();
+            let next: Vec<usize> = (points.iter())
+                .map(|p| nearest_centre(centres.iter().map(Vec::as_slice), p))
+                .collect();
             if next == cluster {
                 break;
             }
@@ -62,11 +64,12 @@ pub fn distance(a: &[f64], b: &[f32]) -> f64 {
     a.iter().zip(b).map(|(x, &y)| (x - y as f64).powi(2)).sum()
 }
 
-/// The index of the centre nearest `point` (the first of equals).
-pub fn nearest_centre(centres: &[Vec<f64>], point: &[f32]) -> usize {
-    (0..centres.len())
-        .min_by(|&a, &b| distance(&centres[a], point).total_cmp(&distance(&centres[b], point)))
-        .unwrap_or(0)
+/// The index of the centre nearest `point` (the first of equals; 0 without centres).
+pub fn nearest_centre<'a>(centres: impl IntoIterator<Item = &'a [f64]>, point: &[f32]) -> usize {
+    (centres.into_iter().enumerate())
+        .map(|(i, centre)| (i, distance(centre, point)))
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map_or(0, |(i, _)| i)
 }
 
 /// The index of the point nearest `centre`.
@@ -98,7 +101,8 @@ mod tests {
             (far[0] - 5.02).abs() < 1e-6 && (far[1] - 1.0).abs() < 1e-9,
             "{far:?}"
         );
-        assert_eq!(nearest_centre(&k.centres, &[4.0, 1.0]), k.cluster[10]);
+        let centres = k.centres.iter().map(Vec::as_slice);
+        assert_eq!(nearest_centre(centres, &[4.0, 1.0]), k.cluster[10]);
         assert_eq!(KMeans::fit(&points, 1).cluster, vec![0; 15]);
     }
 }

@@ -260,23 +260,26 @@ fn fit_correlation(
             _ => format!("{k} regions"),
         }
     );
-    for region in (0..k).filter(|_| k > 1) {
-        let mut count: Vec<(&str, usize)> = Vec::new();
-        for (pose, &action) in poses.iter().zip(&actions) {
-            if correlation.region_of(pose) == region {
-                match count.iter_mut().find(|(a, _)| *a == action) {
-                    Some((_, n)) => *n += 1,
-                    None => count.push((action, 1)),
+    if k > 1 {
+        let taken: Vec<usize> = poses.iter().map(|p| correlation.region_of(p)).collect();
+        for region in 0..k {
+            let mut count: Vec<(&str, usize)> = Vec::new();
+            for (&r, &action) in taken.iter().zip(&actions) {
+                if r == region {
+                    match count.iter_mut().find(|(a, _)| *a == action) {
+                        Some((_, n)) => *n += 1,
+                        None => count.push((action, 1)),
+                    }
                 }
             }
+            let steps: usize = count.iter().map(|(_, n)| n).sum();
+            let count: Vec<String> = count.iter().map(|(a, n)| format!("{n} {a}")).collect();
+            println!(
+                "  region {region}: {steps} steps ({}); {}",
+                count.join(", "),
+                strongest(correlation.region_values(region))
+            );
         }
-        let steps: usize = count.iter().map(|(_, n)| n).sum();
-        let count: Vec<String> = count.iter().map(|(a, n)| format!("{n} {a}")).collect();
-        println!(
-            "  region {region}: {steps} steps ({}); {}",
-            count.join(", "),
-            strongest(correlation.region_values(region))
-        );
     }
     Ok(with_joint_correlation(bytes, Some(&correlation))?)
 }
