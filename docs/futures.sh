@@ -3,7 +3,7 @@
 # model (assets/models/attn-sim.dmbn) finishing grasps and pushes from their first 30%.
 #
 #   bash docs/futures.sh design [OUT]   # the design sets (seeds 1000000-, 1400000-, 1500000-, 1600000-): the sampling settings compared
-#   bash docs/futures.sh final  [OUT]   # the three fresh sets (seeds 2800000-, 2900000-, 3000000-): the reported table
+#   bash docs/futures.sh final  [OUT]   # the three fresh sets (seeds 3100000-, 3200000-, 3300000-): the reported table
 #                                       # (the defaults; the 8 as drawn; drawn with independent joints; the defaults before)
 #   bash docs/futures.sh latent [OUT]   # the latent path against autoregressive sampling, on the design set
 #   bash docs/futures.sh script         # what 8 futures drawn from the simulator's script itself would score
@@ -29,8 +29,21 @@ data() {
   echo "$out/ur5-$1"
 }
 
+# The page's model with a joint correlation per action over both drawn steps (fitted on the
+# shipped file's 300 unseen episodes per action, seeds 750000-): the defaults before the
+# regions per drawn step, with 3 principal directions.
+actions() {
+  if [ ! -f "$out/attn-sim-actions.dmbn" ]; then
+    [ -d "$out/calib-750000" ] || "$dmbn" simulate --out "$out/calib-750000" --sequences 300 --seed 750000 >/dev/null
+    "$dmbn" calibrate --model "$model" --data "$out/calib-750000" --ids 0-299 --fit correlation --regions actions \
+      --out "$out/attn-sim-actions.dmbn" >/dev/null
+  fi
+  echo "$out/attn-sim-actions.dmbn"
+}
+
 # The page's model with one joint correlation pooled over both actions, fitted as it was
-# before the regions (the σ scales' 30 unseen episodes, seeds 700000-): the defaults before.
+# before the regions (the σ scales' 30 unseen episodes, seeds 700000-): the defaults before
+# the regions per action.
 pooled() {
   if [ ! -f "$out/attn-sim-pooled.dmbn" ]; then
     [ -d "$out/calib" ] || "$dmbn" simulate --out "$out/calib" --sequences 30 --seed 700000 >/dev/null
@@ -108,27 +121,42 @@ case $what in
         grep -A5 "sampled futures each" "$name.txt" | grep '^| [gm]' | sed "s/^/$seed C$c bootstrap $boot stage $stage τ$tau /"
       done
     done
-    # The joint correlation pooled or a region per action (the shipped file), and the
-    # future's end drawn at τ 0.7 or 1 (the rest at 0.7). The defaults: actions 1.
+    # The joint correlation pooled or a region per action, and the future's end drawn at τ
+    # 0.7 or 1 (the rest at 0.7), along 3 principal directions.
     for cfg in "pooled 1" "actions 0.7" "actions 1"; do
       read -r regions end <<<"$cfg"
-      file=$model
+      file=$(actions)
       [ "$regions" = pooled ] && file=$(pooled)
       for seed in 1000000 1400000 1500000 1600000; do
         set=$(data $seed)
         name="$out/design-$seed-$regions-end$end"
         "$dmbn" imitate --model "$file" --data "$set" --task finish --samples 8 --end-temperature "$end" \
-          --json "$name.json" >"$name.txt"
+          --components 3 --json "$name.json" >"$name.txt"
         grep -A5 "sampled futures each" "$name.txt" | grep '^| [gm]' | sed "s/^/$seed R $regions, end τ$end /"
+      done
+    done
+    # A region per action, or per action and drawn step (the shipped file), along 3 or 2
+    # principal directions (the end at τ 1). The defaults: steps 2.
+    for cfg in "actions 2" "steps 3" "steps 2"; do
+      read -r regions c <<<"$cfg"
+      file=$model
+      [ "$regions" = actions ] && file=$(actions)
+      for seed in 1000000 1400000 1500000 1600000; do
+        set=$(data $seed)
+        name="$out/design-$seed-$regions-c$c"
+        "$dmbn" imitate --model "$file" --data "$set" --task finish --samples 8 --components "$c" \
+          --json "$name.json" >"$name.txt"
+        grep -A5 "sampled futures each" "$name.txt" | grep '^| [gm]' | sed "s/^/$seed R $regions, C $c /"
       done
     done
     ;;
   final)
-    for seed in 2800000 2900000 3000000; do
+    for seed in 3100000 3200000 3300000; do
       set=$(data $seed)
       "$dmbn" imitate --model "$model" --data "$set" --task finish --samples 8 --json "$out/finish-$seed.json" | tee "$out/finish-$seed.txt"
-      # The defaults before (one joint correlation pooled over both actions, the end at τ 0.7).
-      "$dmbn" imitate --model "$(pooled)" --data "$set" --task finish --samples 8 --end-temperature 0.7 \
+      # The defaults before (a joint correlation per action over both drawn steps, along 3
+      # principal directions).
+      "$dmbn" imitate --model "$(actions)" --data "$set" --task finish --samples 8 --components 3 \
         --json "$out/finish-before-$seed.json" | tee "$out/finish-before-$seed.txt"
       # The 8 as drawn (no representatives), and drawn with independent joints.
       "$dmbn" imitate --model "$model" --data "$set" --task finish --samples 8 --oversample 1 \
@@ -138,7 +166,7 @@ case $what in
       "$dmbn" imitate --model "$model" --data "$set" --task frames --json "$out/frames-$seed.json" | tee "$out/frames-$seed.txt"
       "$dmbn" score --model "$model" --data "$set" --scenario extrap --samples 8 --json "$out/score-$seed.json" | tee "$out/score-$seed.txt"
     done
-    for seed in 2800000 2900000 3000000; do
+    for seed in 3100000 3200000 3300000; do
       spread "$out/finish-$seed.json" "set $seed, the defaults"
       spread "$out/finish-before-$seed.json" "set $seed, the defaults before"
       spread "$out/finish-drawn-$seed.json" "set $seed, as drawn"

@@ -204,23 +204,38 @@ fn dmbn_calibrate_fits_the_correlation_and_a_bad_one_is_refused() {
         (read_header(&std::fs::read(out).unwrap()).unwrap(), stdout)
     };
     // The correlation alone: the σ scales as they were; 2 drawn steps of 8 sequences, a
-    // region per action (each with a centre: the mean pose its draws are nearest).
+    // region per action and drawn step (each with a centre, the mean pose its draws are
+    // nearest, and a phase: the step's, the end at 1).
     let out = tmp.path().join("correlated.dmbn");
     let (header, stdout) = calibrate("correlation", &out, &[]);
     assert!(stdout.contains("16 steps of 8 sequences"), "{stdout}");
-    assert!(stdout.contains("region 1: 8 steps"), "{stdout}");
+    assert!(
+        stdout.contains("4 regions") && stdout.contains("region 3 at phase 1.00: "),
+        "{stdout}"
+    );
     assert_eq!(header.joint_sigma_scales(), before.joint_sigma_scales());
     let d = header.config.joint_count();
     let r = header.joint_correlation().unwrap().expect("a correlation");
-    assert_eq!((r.regions(), r.values().len()), (2, 2 * d * d));
+    assert_eq!((r.regions(), r.values().len()), (4, 4 * d * d));
     assert_eq!(
         header.joint_correlation_centres.as_ref().unwrap().len(),
-        2 * d
+        4 * d
     );
-    for region in 0..2 {
+    let phases = header.joint_correlation_phases.clone().unwrap();
+    assert!(phases[0] < 0.9 && phases[1] == 1.0 && phases[2] < 0.9 && phases[3] == 1.0);
+    for region in 0..4 {
         let values = r.region_values(region);
         assert!((values.iter().enumerate()).any(|(k, v)| k / d != k % d && v.abs() > 0.3));
     }
+    // A region per action over both drawn steps: 2, no phases.
+    let (actions, stdout) = calibrate(
+        "correlation",
+        &tmp.path().join("actions.dmbn"),
+        &["--regions", "actions"],
+    );
+    assert!(stdout.contains("region 1: 8 steps"), "{stdout}");
+    let two = actions.joint_correlation().unwrap().unwrap();
+    assert_eq!((two.regions(), actions.joint_correlation_phases), (2, None));
     // Pooled (`--regions 1`): one R, no centres.
     let (pooled, _) = calibrate(
         "correlation",
@@ -251,6 +266,10 @@ fn dmbn_calibrate_fits_the_correlation_and_a_bad_one_is_refused() {
             serde_json::json!(vec![1.5f32; 2 * d * d]),
         ),
         ("joint_correlation_centres", serde_json::json!([0.0, 1.0])),
+        (
+            "joint_correlation_phases",
+            serde_json::json!([0.5, 1.0, 2.0, 1.0]),
+        ),
     ] {
         let err =
             Predictor::from_bytes(&support::with_header_field(&bytes, field, bad)).unwrap_err();

@@ -102,7 +102,7 @@ pub fn draw_futures_from(
                     let eps = match correlation {
                         Some(r) => {
                             let pose = predictor.normalization().normalize(mean);
-                            r.correlate(&pose, &eps, components)
+                            r.correlate(&pose, order[k], &eps, components)
                         }
                         None => eps,
                     };
@@ -253,6 +253,9 @@ pub struct DrawnStepError {
     pub error: Vec<f32>,
     /// The mean it is an error from, normalised: where the correlation's regions lie.
     pub pose: Vec<f32>,
+    /// The drawn step: its index on the grid (0 first) and its phase.
+    pub step: usize,
+    pub phase: f32,
 }
 
 /// The standardised errors, (truth − μ) / σ, of `seq`'s joints at the grid of its `imagined`
@@ -289,6 +292,8 @@ pub fn drawn_step_errors(
             errors.push(DrawnStepError {
                 error: error.collect(),
                 pose: predictor.normalization().normalize(mean),
+                step: k,
+                phase: steps[k],
             });
             truth[k].to_vec()
         },

@@ -84,6 +84,10 @@ pub struct ModelHeader {
     /// K × D normalised joint values: a draw takes the R whose centre is nearest its mean.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub joint_correlation_centres: Option<Vec<f32>>,
+    /// Where the regions were fitted per drawn step, their phases (K, 0-1): a draw takes the
+    /// R among those fitted at the phase nearest its own.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub joint_correlation_phases: Option<Vec<f32>>,
     /// The weight section.
     pub weights: WeightsInfo,
 }
@@ -101,9 +105,10 @@ impl ModelHeader {
     pub fn joint_correlation(&self) -> Result<Option<JointCorrelation>, ModelError> {
         let joints = self.config.joint_count();
         let centres = self.joint_correlation_centres.clone();
+        let phases = self.joint_correlation_phases.clone();
         (self.joint_correlation.clone())
             .map(|values| {
-                JointCorrelation::with_regions("joint_correlation", values, centres, joints)
+                JointCorrelation::with_regions("joint_correlation", values, centres, phases, joints)
             })
             .transpose()
     }
@@ -135,6 +140,7 @@ pub fn save_bytes(
         forecast_joint_sigma_scale: None,
         joint_correlation: None,
         joint_correlation_centres: None,
+        joint_correlation_phases: None,
         weights: WeightsInfo {
             format: "burnpack".into(),
             dtype: if half {
@@ -171,6 +177,7 @@ pub fn with_joint_correlation(
     let (mut header, weights) = split(bytes)?;
     header.joint_correlation = correlation.map(|r| r.values());
     header.joint_correlation_centres = correlation.and_then(|r| r.centres());
+    header.joint_correlation_phases = correlation.and_then(|r| r.phases());
     header.joint_correlation()?;
     assemble(&header, weights)
 }

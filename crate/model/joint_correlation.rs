@@ -17,9 +17,12 @@ use super::ModelError;
 /// --regions`): the same joint errors mean different motions in different poses (a push's
 /// length along the table, a held object's carry at its height), so one R pooled over both
 /// moves the arm in directions neither takes (a carried object drawn higher or lower). Each
-/// region is one action's drawn steps, or a k-means cluster of them, its centre their mean
-/// predicted pose (normalised); a draw takes the R of the region whose centre is nearest the
-/// mean it is drawn around.
+/// region is one action's drawn steps (at one drawn step of the future, or all), or a k-means
+/// cluster of them, its centre their mean predicted pose (normalised); a draw takes the R of
+/// the region whose centre is nearest the mean it is drawn around. Regions fitted per drawn
+/// step also hold the steps' mean phase, and a draw looks only among those nearest its own:
+/// at a carry's end the errors are its spot, a carry pose earlier they are mostly its timing,
+/// and the two poses are too alike to tell apart.
 #[derive(Debug, Clone, PartialEq)]
 pub struct JointCorrelation {
     joints: usize,
@@ -32,6 +35,9 @@ struct Region {
     /// The mean pose (normalised joint values) of the steps it was fitted on, in f64 as the
     /// distances to it are taken; empty where the file holds one R.
     centre: Vec<f64>,
+    /// The mean phase (0-1) of the steps it was fitted on, where its regions were fitted per
+    /// drawn step.
+    phase: Option<f32>,
     /// R, row-major `[D, D]`.
     values: Vec<f32>,
     /// R's principal factor, row-major `[D, D]`: column c is √λ_c v_c, the c-th largest
@@ -47,20 +53,26 @@ impl JointCorrelation {
     pub const MAX_REGIONS: usize = 16;
     /// How far from symmetric, or from a unit diagonal, a stored R may be (rounding).
     const TOLERANCE: f32 = 1e-4;
+    /// Regions whose phases lie within this of the nearest one to a draw's phase count as
+    /// fitted at its drawn step (the same step of sequences of other lengths, or of another
+    /// action, falls at slightly other phases).
+    pub const PHASE_TOLERANCE: f32 = 0.05;
 
     /// One R as stored (row-major, `joints` × `joints`): fails, naming `field`, unless it is
     /// a finite symmetric matrix of that size with a unit diagonal and positive definite.
     pub fn new(field: &str, values: Vec<f32>, joints: usize) -> Result<Self, ModelError> {
-        Self::with_regions(field, values, None, joints)
+        Self::with_regions(field, values, None, None, joints)
     }
 
     /// K regions' R as stored (`values`: K × D × D, row-major) with their `centres` (K × D;
-    /// needed where K > 1, and then finite): fails, naming `field`, unless each R is a
-    /// correlation matrix as [`JointCorrelation::new`] checks.
+    /// needed where K > 1, and then finite) and, where they were fitted per drawn step, their
+    /// `phases` (K, from 0 to 1): fails, naming `field`, unless each R is a correlation matrix
+    /// as [`JointCorrelation::new`] checks.
     pub fn with_regions(
         field: &str,
         values: Vec<f32>,
         centres: Option<Vec<f32>>,
+        phases: Option<Vec<f32>>,
         joints: usize,
     ) -> Result<Self, ModelError> {
         let bad = |what: String| ModelError::Header(format!("{field} {what}"));
@@ -85,15 +97,27 @@ impl JointCorrelation {
                 )))
             }
         };
-        let regions = (values.chunks(per).zip(centres))
+        let phases: Vec<Option<f32>> = match phases {
+            None => vec![None; k],
+            Some(p) if k > 1 && p.len() == k && p.iter().all(|t| (0.0..=1.0).contains(t)) => {
+                p.into_iter().map(Some).collect()
+            }
+            Some(p) => {
+                return Err(ModelError::Header(format!(
+                    "{field}_phases hold {} values: expected {k} phases from 0 to 1 (one for each of its regions, where there are 2 or more)",
+                    p.len()
+                )))
+            }
+        };
+        let regions = (values.chunks(per).zip(centres).zip(phases))
             .enumerate()
-            .map(|(r, (values, centre))| {
+            .map(|(r, ((values, centre), phase))| {
                 let field = if k == 1 {
                     field.to_string()
                 } else {
                     format!("{field} (region {r})")
                 };
-                Region::new(&field, values.to_vec(), centre, joints)
+                Region::new(&field, values.to_vec(), centre, phase, joints)
             })
             .collect::<Result<Vec<_>, _>>()?;
         Ok(JointCorrelation { joints, regions })
@@ -120,37 +144,58 @@ impl JointCorrelation {
         if !(1..=Self::MAX_REGIONS.min(poses.len())).contains(&regions) {
             return None;
         }
-        Self::fit_labelled(errors, poses, &KMeans::fit(poses, regions).cluster, joints)
+        let labels = KMeans::fit(poses, regions).cluster;
+        Self::fit_labelled(errors, poses, &labels, None, joints)
     }
 
-    /// One R per label (`labels[i]` from 0 to K − 1, say the action each error comes from),
-    /// each region's centre the mean of its `poses`: a draw takes the R of the label whose
-    /// mean pose is nearest its own. `None` where a label has fewer than 2 rows, the lengths
-    /// differ, or K is above [`JointCorrelation::MAX_REGIONS`].
+    /// One R per label (`labels[i]` from 0 to K − 1, say the action each error comes from, or
+    /// the action and drawn step), each region's centre the mean of its `poses` and, given
+    /// each error's `phases`, its phase their mean: a draw takes the R of the label whose
+    /// mean pose is nearest its own (among those of phases nearest its own). `None` where a
+    /// label has fewer than 2 rows, the lengths differ, or K is above
+    /// [`JointCorrelation::MAX_REGIONS`].
     pub fn fit_labelled(
         errors: &[Vec<f32>],
         poses: &[Vec<f32>],
         labels: &[usize],
+        phases: Option<&[f32]>,
         joints: usize,
     ) -> Option<Self> {
         let k = labels.iter().max()? + 1;
-        if poses.len() != errors.len() || labels.len() != errors.len() || k > Self::MAX_REGIONS {
+        let n = errors.len();
+        if poses.len() != n
+            || labels.len() != n
+            || phases.is_some_and(|p| p.len() != n)
+            || k > Self::MAX_REGIONS
+        {
             return None;
         }
         if k == 1 {
             return Self::fit(errors, joints);
         }
-        let (mut values, mut centres) = (Vec::new(), Vec::new());
+        let (mut values, mut centres, mut means) = (Vec::new(), Vec::new(), Vec::new());
         for c in 0..k {
-            let members: Vec<usize> = (0..errors.len()).filter(|&i| labels[i] == c).collect();
+            let members: Vec<usize> = (0..n).filter(|&i| labels[i] == c).collect();
             let rows: Vec<Vec<f32>> = members.iter().map(|&i| errors[i].clone()).collect();
             values.extend(fit_values(&rows, joints)?);
             centres.extend((0..joints).map(|j| {
                 let sum: f64 = members.iter().map(|&i| poses[i][j] as f64).sum();
                 (sum / members.len() as f64) as f32
             }));
+            if let Some(p) = phases {
+                let sum: f64 = members.iter().map(|&i| p[i] as f64).sum();
+                means.push((sum / members.len() as f64) as f32);
+            }
         }
-        Self::with_regions("the fitted correlation", values, Some(centres), joints).ok()
+        let phases = phases.map(|_| means);
+        Self::with_regions(
+            "the fitted correlation",
+            values,
+            Some(centres),
+            phases,
+            joints,
+        )
+        .ok()
     }
 
     /// D: joint values a step.
@@ -185,21 +230,37 @@ impl JointCorrelation {
         })
     }
 
-    /// The region a draw around `pose` (normalised joint values) takes: the one whose centre
-    /// is nearest.
-    pub fn region_of(&self, pose: &[f32]) -> usize {
-        nearest_centre(self.regions.iter().map(|r| r.centre.as_slice()), pose)
+    /// The regions' phases, K (the model file's `joint_correlation_phases`); `None` unless
+    /// they were fitted per drawn step.
+    pub fn phases(&self) -> Option<Vec<f32>> {
+        self.regions.iter().map(|r| r.phase).collect()
+    }
+
+    /// The region a draw around `pose` (normalised joint values) at `phase` takes: the one
+    /// whose centre is nearest, among those whose phase is within
+    /// [`JointCorrelation::PHASE_TOLERANCE`] of the phase nearest `phase` where the regions
+    /// have phases.
+    pub fn region_of(&self, pose: &[f32], phase: f32) -> usize {
+        let gap = |r: &Region| r.phase.map_or(0.0, |p| (p - phase).abs());
+        let nearest = (self.regions.iter().map(gap)).fold(f32::INFINITY, f32::min);
+        let candidates: Vec<usize> = (0..self.regions.len())
+            .filter(|&r| gap(&self.regions[r]) <= nearest + Self::PHASE_TOLERANCE)
+            .collect();
+        let centres = candidates
+            .iter()
+            .map(|&r| self.regions[r].centre.as_slice());
+        candidates[nearest_centre(centres, pose)]
     }
 
     /// D independent standard normal draws `eps` made to vary together as R of the region of
-    /// `pose` says ([`JointCorrelation::region_of`]), along its `components` leading
+    /// `pose` at `phase` says ([`JointCorrelation::region_of`]), along its `components` leading
     /// principal directions (Σ_c √λ_c v_c ε_c over c < C; all D: the draws' correlation is R;
     /// fewer: the rest of the variation is left out). `eps[c]` drives direction c, so the same
     /// draws with fewer components are the same futures, pruned.
-    pub fn correlate(&self, pose: &[f32], eps: &[f32], components: usize) -> Vec<f32> {
+    pub fn correlate(&self, pose: &[f32], phase: f32, eps: &[f32], components: usize) -> Vec<f32> {
         let d = self.joints;
         let kept = components.min(d);
-        let principal = &self.regions[self.region_of(pose)].principal;
+        let principal = &self.regions[self.region_of(pose, phase)].principal;
         (0..d)
             .map(|i| (0..kept).map(|c| principal[i * d + c] * eps[c]).sum())
             .collect()
@@ -211,6 +272,7 @@ impl Region {
         field: &str,
         values: Vec<f32>,
         centre: Vec<f32>,
+        phase: Option<f32>,
         joints: usize,
     ) -> Result<Self, ModelError> {
         let bad = |what: String| ModelError::Header(format!("{field} {what}"));
@@ -247,6 +309,7 @@ impl Region {
         }
         Ok(Region {
             centre: centre.iter().map(|&v| v as f64).collect(),
+            phase,
             values,
             principal,
         })
@@ -378,11 +441,11 @@ mod tests {
         }
         // The leading direction moves the first three together (the third against), the
         // fourth not at all: the first and the third go against each other.
-        let x = r.correlate(&[], &[1.0, 0.0, 0.0, 0.0], 4);
+        let x = r.correlate(&[], 0.5, &[1.0, 0.0, 0.0, 0.0], 4);
         assert!(x[0] * x[2] < 0.0 && x[3].abs() < 1e-6, "{x:?}");
         assert!((x[0] + x[2]).abs() < 0.05 * x[0].abs(), "{x:?}");
         // One component: whatever the other draws, only the leading direction moves.
-        assert_eq!(r.correlate(&[], &[1.0, 5.0, -3.0, 2.0], 1), x);
+        assert_eq!(r.correlate(&[], 0.5, &[1.0, 5.0, -3.0, 2.0], 1), x);
     }
 
     #[test]
@@ -403,24 +466,79 @@ mod tests {
         assert!(pooled.values()[1].abs() < 0.2, "{:?}", pooled.values());
         let r = JointCorrelation::fit_regions(&errors, &poses, 2, 2).unwrap();
         assert_eq!(r.regions(), 2);
-        let (near, far) = (r.region_of(&[0.2, 0.1]), r.region_of(&[4.0, 6.0]));
+        let (near, far) = (r.region_of(&[0.2, 0.1], 0.5), r.region_of(&[4.0, 6.0], 0.5));
         assert_ne!(near, far);
         assert!(r.region_values(near)[1] > 0.95 && r.region_values(far)[1] < -0.95);
-        let x = r.correlate(&[0.0, 0.0], &[1.0, 0.0], 1);
-        let y = r.correlate(&[5.0, 5.0], &[1.0, 0.0], 1);
+        let x = r.correlate(&[0.0, 0.0], 0.5, &[1.0, 0.0], 1);
+        let y = r.correlate(&[5.0, 5.0], 0.5, &[1.0, 0.0], 1);
         assert!(x[0] * x[1] > 0.0 && y[0] * y[1] < 0.0, "{x:?} {y:?}");
         // Stored and read back: the same regions, the same draws.
         let centres = r.centres().unwrap();
         assert_eq!(centres.len(), 4);
-        let back = JointCorrelation::with_regions("r", r.values(), Some(centres), 2).unwrap();
+        let back = JointCorrelation::with_regions("r", r.values(), Some(centres), None, 2).unwrap();
         assert_eq!(back, r);
         // Too few rows for a region, or no centres for several: refused.
         assert!(JointCorrelation::fit_regions(&errors[..3], &poses[..3], 2, 4).is_none());
-        let err = JointCorrelation::with_regions("joint_correlation", r.values(), None, 2);
+        let err = JointCorrelation::with_regions("joint_correlation", r.values(), None, None, 2);
         assert!(err
             .unwrap_err()
             .to_string()
             .contains("expected 2 × 2 finite values"));
+    }
+
+    #[test]
+    fn regions_fitted_per_drawn_step_are_chosen_by_phase_then_pose() {
+        // One pose, two drawn steps: at phase 0.6 the errors go together, at 1 against each
+        // other. The pose alone cannot tell them apart; the phase does.
+        let (mut errors, mut poses, mut labels, mut phases) =
+            (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        for i in 0..400 {
+            let a = ((i * 37 % 101) as f32 / 50.0) - 1.0;
+            let b = ((i * 53 % 97) as f32 / 48.0) - 1.0;
+            let end = i % 2 == 1;
+            errors.push(vec![a, if end { -a } else { a } + 0.1 * b]);
+            poses.push(vec![0.01 * b, 0.0]);
+            labels.push(end as usize);
+            // Sequences of other lengths: the same drawn step at slightly other phases.
+            phases.push(if end { 1.0 } else { 0.6 + 0.02 * b });
+        }
+        let r = JointCorrelation::fit_labelled(&errors, &poses, &labels, Some(&phases), 2).unwrap();
+        let stored = r.phases().unwrap();
+        assert!(
+            (stored[0] - 0.6).abs() < 0.01 && stored[1] == 1.0,
+            "{stored:?}"
+        );
+        assert_eq!(
+            (
+                r.region_of(&[0.0, 0.0], 0.62),
+                r.region_of(&[0.0, 0.0], 0.97)
+            ),
+            (0, 1)
+        );
+        assert!(r.region_values(0)[1] > 0.95 && r.region_values(1)[1] < -0.95);
+        let back = JointCorrelation::with_regions("r", r.values(), r.centres(), r.phases(), 2);
+        assert_eq!(back.unwrap(), r);
+        // Phases that are not one per region, or not from 0 to 1: refused by name.
+        for phases in [vec![0.6], vec![0.6, 1.5]] {
+            let err = JointCorrelation::with_regions(
+                "joint_correlation",
+                r.values(),
+                r.centres(),
+                Some(phases),
+                2,
+            );
+            assert!(err
+                .unwrap_err()
+                .to_string()
+                .contains("joint_correlation_phases hold"));
+        }
+        // Without phases: no phases stored.
+        assert!(
+            JointCorrelation::fit_labelled(&errors, &poses, &labels, None, 2)
+                .unwrap()
+                .phases()
+                .is_none()
+        );
     }
 
     #[test]

@@ -49,6 +49,9 @@ pub struct SafetensorsHeader {
     /// Its regions' centres where it holds several (K × D normalised joint values).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub joint_correlation_centres: Option<Vec<f32>>,
+    /// Their phases where they were fitted per drawn step (K).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub joint_correlation_phases: Option<Vec<f32>>,
 }
 
 /// The model file in `model_file` as safetensors bytes, f32 (or f16 when `half`).
@@ -62,6 +65,7 @@ pub fn export_safetensors(model_file: &[u8], half: bool) -> Result<Vec<u8>, Mode
         forecast_joint_sigma_scale: file.forecast_joint_sigma_scale,
         joint_correlation: file.joint_correlation,
         joint_correlation_centres: file.joint_correlation_centres,
+        joint_correlation_phases: file.joint_correlation_phases,
     };
     let header = serde_json::to_string(&header)
         .map_err(|e| ModelError::Header(format!("cannot write the metadata: {e}")))?;
@@ -133,9 +137,17 @@ pub fn import_safetensors(bytes: &[u8], half: bool) -> Result<Vec<u8>, ModelErro
     match header.joint_correlation {
         Some(values) => {
             let joints = header.config.joint_count();
-            let centres = header.joint_correlation_centres;
-            let correlation =
-                JointCorrelation::with_regions("joint_correlation", values, centres, joints)?;
+            let (centres, phases) = (
+                header.joint_correlation_centres,
+                header.joint_correlation_phases,
+            );
+            let correlation = JointCorrelation::with_regions(
+                "joint_correlation",
+                values,
+                centres,
+                phases,
+                joints,
+            )?;
             super::with_joint_correlation(&bytes, Some(&correlation))
         }
         None => Ok(bytes),

@@ -170,8 +170,8 @@ pub struct SamplingArgs {
     pub joints: JointDraws,
     /// C: correlated joints vary along the C leading principal directions of the file's joint
     /// correlation only, or along `all` of them.
-    #[arg(long, default_value = "3", value_parser = parse_components)]
-    pub components: std::option::Option<usize>,
+    #[arg(long, default_value_t = Components(Sampling::default().components))]
+    pub components: Components,
     /// Each autoregressive future conditions on its own bootstrap resample of the
     /// observations (the latest always kept), or on all of them (`false`).
     #[arg(long, default_value_t = Sampling::default().bootstrap, action = clap::ArgAction::Set)]
@@ -207,7 +207,7 @@ impl SamplingArgs {
             grid: self.grid,
             order: self.order,
             joints: self.joints,
-            components: self.components,
+            components: self.components.0,
             bootstrap: self.bootstrap,
             stage: self.stage,
             oversample: self.oversample,
@@ -218,15 +218,31 @@ impl SamplingArgs {
     }
 }
 
-/// `--components`: a count of principal directions, or `all`.
-fn parse_components(s: &str) -> Result<Option<usize>, String> {
-    match s {
-        "all" => Ok(None),
-        _ => match s.parse::<usize>() {
-            Ok(c) if c >= 1 => Ok(Some(c)),
-            _ => Err(format!(
-                "{s:?} is not a count of principal directions: expected 1 or more, or all"
-            )),
-        },
+/// `--components`: a count of principal directions, or `all` (`None`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Components(pub std::option::Option<usize>);
+
+impl std::str::FromStr for Components {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "all" => Ok(Components(None)),
+            _ => match s.parse::<usize>() {
+                Ok(c) if c >= 1 => Ok(Components(Some(c))),
+                _ => Err(format!(
+                    "{s:?} is not a count of principal directions: expected 1 or more, or all"
+                )),
+            },
+        }
+    }
+}
+
+impl std::fmt::Display for Components {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self.0 {
+            Some(c) => write!(f, "{c}"),
+            None => f.write_str("all"),
+        }
     }
 }

@@ -46,10 +46,12 @@ pub struct CalibrateArgs {
     fit: Fit,
     /// Where the joint correlation is fitted per region of the poses the futures' drawn steps
     /// reach, so that a draw moves the arm as the demonstrations do there (a push along the
-    /// table, a carry at its height): `actions`, a region per action folder (a draw takes the
-    /// action's whose mean pose is nearest its own); K, the K k-means clusters of the poses;
-    /// 1, one correlation pooled over all of them.
-    #[arg(long, default_value = "actions", value_parser = parse_regions)]
+    /// table, a carry at its height): `steps`, a region per action folder and drawn step (a
+    /// draw takes, among the regions of its step, the action's whose mean pose is nearest its
+    /// own: a carry's end varies where it ends, a step before mostly when it gets there);
+    /// `actions`, a region per action folder over all drawn steps; K, the K k-means clusters
+    /// of the poses; 1, one correlation pooled over all of them.
+    #[arg(long, default_value = "steps", value_parser = parse_regions)]
     regions: Regions,
     /// Where to write the calibrated model file (the same weights, the scale in its header).
     #[arg(long)]
@@ -59,17 +61,19 @@ pub struct CalibrateArgs {
 /// `--regions`: the joint correlation's regions.
 #[derive(Clone, Copy, PartialEq, Debug)]
 enum Regions {
+    Steps,
     Actions,
     Clusters(usize),
 }
 
 fn parse_regions(s: &str) -> Result<Regions, String> {
     match s {
+        "steps" => Ok(Regions::Steps),
         "actions" => Ok(Regions::Actions),
         _ => match s.parse::<usize>() {
             Ok(k) if (1..=JointCorrelation::MAX_REGIONS).contains(&k) => Ok(Regions::Clusters(k)),
             _ => Err(format!(
-                "{s:?}: expected actions, or a count of regions from 1 to {}",
+                "{s:?}: expected steps, actions, or a count of regions from 1 to {}",
                 JointCorrelation::MAX_REGIONS
             )),
         },
@@ -189,6 +193,7 @@ fn fit_correlation(
     let grid = Sampling::default().grid;
     let bar = progress(refs.len(), "fitting the joint correlation");
     let (mut errors, mut poses, mut actions) = (Vec::new(), Vec::new(), Vec::new());
+    let (mut steps_of, mut phases) = (Vec::new(), Vec::new());
     for r in refs {
         let seq = dataset.read(r, Some(size))?;
         let Some(steps) = Scenario::Extrap.steps(seq.len(), Scenario::EXTRAP_OBSERVATIONS) else {
@@ -209,6 +214,8 @@ fn fit_correlation(
         for row in rows {
             errors.push(row.error);
             poses.push(row.pose);
+            steps_of.push(row.step);
+            phases.push(row.phase);
             actions.push(r.action.as_str());
         }
         bar.inc(1);
@@ -218,12 +225,17 @@ fn fit_correlation(
     let mut names: Vec<&str> = actions.clone();
     names.sort_unstable();
     names.dedup();
+    let action_of = |a: &&str| names.iter().position(|n| n == a).unwrap_or(0);
     let fitted = match args.regions {
-        Regions::Actions => {
-            let labels: Vec<usize> = (actions.iter())
-                .map(|a| names.iter().position(|n| n == a).unwrap_or(0))
+        Regions::Steps => {
+            let labels: Vec<usize> = (actions.iter().zip(&steps_of))
+                .map(|(a, &k)| action_of(a) * grid + k)
                 .collect();
-            JointCorrelation::fit_labelled(&errors, &poses, &labels, d)
+            JointCorrelation::fit_labelled(&errors, &poses, &labels, Some(&phases), d)
+        }
+        Regions::Actions => {
+            let labels: Vec<usize> = actions.iter().map(action_of).collect();
+            JointCorrelation::fit_labelled(&errors, &poses, &labels, None, d)
         }
         Regions::Clusters(k) => JointCorrelation::fit_regions(&errors, &poses, d, k),
     };
@@ -232,6 +244,10 @@ fn fit_correlation(
             "ids {a}-{b}: {} drawn steps to fit the joint correlation on, {}: expected 2 or more in each region (fewer --regions, or more ids)",
             errors.len(),
             match args.regions {
+                Regions::Steps => format!(
+                    "a region per action and drawn step ({} × {grid})",
+                    names.join(", ")
+                ),
                 Regions::Actions => format!("a region per action ({})", names.join(", ")),
                 Regions::Clusters(k) => format!("in {k} regions"),
             }
@@ -261,7 +277,9 @@ fn fit_correlation(
         }
     );
     if k > 1 {
-        let taken: Vec<usize> = poses.iter().map(|p| correlation.region_of(p)).collect();
+        let taken: Vec<usize> = (poses.iter().zip(&phases))
+            .map(|(p, &t)| correlation.region_of(p, t))
+            .collect();
         for region in 0..k {
             let mut count: Vec<(&str, usize)> = Vec::new();
             for (&r, &action) in taken.iter().zip(&actions) {
@@ -274,8 +292,10 @@ fn fit_correlation(
             }
             let steps: usize = count.iter().map(|(_, n)| n).sum();
             let count: Vec<String> = count.iter().map(|(a, n)| format!("{n} {a}")).collect();
+            let phase = (correlation.phases())
+                .map_or(String::new(), |p| format!(" at phase {:.2}", p[region]));
             println!(
-                "  region {region}: {steps} steps ({}); {}",
+                "  region {region}{phase}: {steps} steps ({}); {}",
                 count.join(", "),
                 strongest(correlation.region_values(region))
             );
