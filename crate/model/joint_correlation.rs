@@ -244,7 +244,11 @@ impl JointCorrelation {
         let gap = |r: &Region| r.phase.map_or(0.0, |p| (p - phase).abs());
         let nearest = (self.regions.iter().map(gap)).fold(f32::INFINITY, f32::min);
         let candidates: Vec<usize> = (0..self.regions.len())
-            .filter(|&r| gap(&self.regions[r]) <= nearest + Self::PHASE_TOLERANCE)
+            // (A phase that is not a number keeps them all.)
+            .filter(|&r| {
+                let g = gap(&self.regions[r]);
+                g.is_nan() || g <= nearest + Self::PHASE_TOLERANCE
+            })
             .collect();
         let centres = candidates
             .iter()
@@ -515,6 +519,7 @@ mod tests {
             ),
             (0, 1)
         );
+        assert!(r.region_of(&[0.0, 0.0], f32::NAN) < 2);
         assert!(r.region_values(0)[1] > 0.95 && r.region_values(1)[1] < -0.95);
         let back = JointCorrelation::with_regions("r", r.values(), r.centres(), r.phases(), 2);
         assert_eq!(back.unwrap(), r);
