@@ -63,6 +63,13 @@ fn export_then_import_predicts_exactly_as_the_shipped_model() {
         let back = read_header(&imported).unwrap();
         assert_eq!(back.config, header.config, "{}", path.display());
         assert_eq!(back.normalization, header.normalization);
+        // The joint correlation too, its regions' centres and phases with it.
+        assert_eq!(
+            back.joint_correlation().unwrap(),
+            header.joint_correlation().unwrap(),
+            "{}",
+            path.display()
+        );
         for blend in [0.0, 0.5, 1.0] {
             let want = Predictor::from_bytes(&bytes)
                 .unwrap()
