@@ -10,7 +10,7 @@
 #
 # Each set is 100 simulated demonstrations per action (`dmbn simulate --sequences 100`). OUT
 # (default out/futures) receives the data, every run's JSON and printed tables. On a 2-core
-# machine: design about 2 h, final about 30 min, latent about 3 h (its training), script
+# machine: design about 2.5 h, final about 30 min, latent about 3 h (its training), script
 # seconds.
 set -euo pipefail
 
