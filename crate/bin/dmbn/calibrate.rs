@@ -280,6 +280,7 @@ fn fit_correlation(
         let taken: Vec<usize> = (poses.iter().zip(&phases))
             .map(|(p, &t)| correlation.region_of(p, t))
             .collect();
+        let region_phases = correlation.phases();
         for region in 0..k {
             let mut count: Vec<(&str, usize)> = Vec::new();
             for (&r, &action) in taken.iter().zip(&actions) {
@@ -292,7 +293,7 @@ fn fit_correlation(
             }
             let steps: usize = count.iter().map(|(_, n)| n).sum();
             let count: Vec<String> = count.iter().map(|(a, n)| format!("{n} {a}")).collect();
-            let phase = (correlation.phases())
+            let phase = (region_phases.as_ref())
                 .map_or(String::new(), |p| format!(" at phase {:.2}", p[region]));
             println!(
                 "  region {region}{phase}: {steps} steps ({}); {}",
