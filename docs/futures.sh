@@ -5,16 +5,17 @@
 #   bash docs/futures.sh design [OUT]   # the design sets (seeds 1000000-, 1400000-, 1500000-, 1600000-): the sampling settings compared
 #   bash docs/futures.sh final  [OUT]   # the three fresh sets (seeds 3100000-, 3200000-, 3300000-): the reported table
 #                                       # (the defaults; the 8 as drawn; drawn with independent joints; the defaults before)
+#   bash docs/futures.sh further [OUT]  # the defaults on three more fresh sets (seeds 3400000-, 3500000-, 3600000-)
 #   bash docs/futures.sh latent [OUT]   # the latent path against autoregressive sampling, on the design set
 #   bash docs/futures.sh script         # what 8 futures drawn from the simulator's script itself would score
 #
 # Each set is 100 simulated demonstrations per action (`dmbn simulate --sequences 100`). OUT
 # (default out/futures) receives the data, every run's JSON and printed tables. On a 2-core
-# machine: design about 2.5 h, final about 30 min, latent about 3 h (its training), script
+# machine: design about 2.5 h, final about 30 min, further about 10 min, latent about 3 h (its training), script
 # seconds.
 set -euo pipefail
 
-what=${1:?usage: bash docs/futures.sh design|final|latent|script [OUT]}
+what=${1:?usage: bash docs/futures.sh design|final|further|latent|script [OUT]}
 root=$(cd "$(dirname "$0")/.." && pwd)
 out=${2:-$root/out/futures}
 export CARGO_TARGET_DIR=${CARGO_TARGET_DIR:-$HOME/.cache/dmbn/target}
@@ -173,6 +174,14 @@ case $what in
       spread "$out/finish-independent-$seed.json" "set $seed, as drawn, independent joints"
     done
     ;;
+  further)
+    # The defaults on three more fresh sets, first run after the choice and after `final`: how
+    # far the mean over three sets moves with the demonstrations drawn.
+    for seed in 3400000 3500000 3600000; do
+      set=$(data $seed)
+      "$dmbn" imitate --model "$model" --data "$set" --task finish --samples 8 --json "$out/finish-$seed.json" | tee "$out/finish-$seed.txt"
+    done
+    ;;
   latent)
     # attn-sim trained on with a latent path of 16 values (3,000-6,000 steps each, 15-30 min on
     # two cores; resumable: run again), then its futures on the design set.
@@ -232,20 +241,22 @@ case $what in
 import math, random
 r, n, s = random.Random(0), 100_000, 8
 spot = lambda: (r.uniform(-6, 6), r.uniform(-6, 6))
-valid = covered = pushes = 0
+valid = covered = pushes = centre = 0
 for _ in range(n):
     demo = spot()
+    centre += math.dist(demo, (0, 0)) < 5
     hits = [math.dist(demo, spot()) < 5 for _ in range(s)]
     valid, covered = valid + sum(hits), covered + any(hits)
     length = r.uniform(12, 22)
     pushes += any(abs(length - r.uniform(12, 22)) < 3 for _ in range(s))
 print(f"the script's own futures, {s} a demonstration: grasps valid (carried within 5 cm) "
       f"{valid / (s * n):.0%}, covered {covered / n:.0%}; pushes covered {pushes / n:.0%}; "
-      f"a push's length spreads {10 / math.sqrt(12):.1f} cm (standard deviation)")
+      f"a push's length spreads {10 / math.sqrt(12):.1f} cm (standard deviation); grasp futures all carried "
+      f"to the square's centre, the most any sampler's can be valid: {centre / n:.0%}")
 PY
     ;;
   *)
-    echo "error: the first argument is design, final, latent or script, not '$what'" >&2
+    echo "error: the first argument is design, final, further, latent or script, not '$what'" >&2
     exit 2
     ;;
 esac
