@@ -30,6 +30,13 @@ data() {
   echo "$out/ur5-$1"
 }
 
+# The defaults: the page's model finishing set SEED's demonstrations, 8 futures each.
+finish() {
+  local set
+  set=$(data "$1")
+  "$dmbn" imitate --model "$model" --data "$set" --task finish --samples 8 --json "$out/finish-$1.json" | tee "$out/finish-$1.txt"
+}
+
 # The page's model with a joint correlation per action over both drawn steps (fitted on the
 # shipped file's 300 unseen episodes per action, seeds 750000-): the defaults before the
 # regions per drawn step, with 3 principal directions.
@@ -154,7 +161,7 @@ case $what in
   final)
     for seed in 3100000 3200000 3300000; do
       set=$(data $seed)
-      "$dmbn" imitate --model "$model" --data "$set" --task finish --samples 8 --json "$out/finish-$seed.json" | tee "$out/finish-$seed.txt"
+      finish "$seed"
       # The defaults before (a joint correlation per action over both drawn steps, along 3
       # principal directions).
       "$dmbn" imitate --model "$(actions)" --data "$set" --task finish --samples 8 --components 3 \
@@ -178,8 +185,7 @@ case $what in
     # The defaults on three more fresh sets, first run after the choice and after `final`: how
     # far the mean over three sets moves with the demonstrations drawn.
     for seed in 3400000 3500000 3600000; do
-      set=$(data $seed)
-      "$dmbn" imitate --model "$model" --data "$set" --task finish --samples 8 --json "$out/finish-$seed.json" | tee "$out/finish-$seed.txt"
+      finish "$seed"
     done
     ;;
   latent)
